@@ -1,0 +1,23 @@
+# find_package for every dependency. All come from Debian 12 packages; see
+# docs/stack-notes in the project docs for link-order gotchas (tinygltf before draco,
+# flann headers before OpenCV's, cpp-httplib only through pkg-config).
+find_package(OpenCV REQUIRED COMPONENTS core imgproc imgcodecs features2d calib3d video videoio flann)
+find_package(Eigen3 3.3 REQUIRED NO_MODULE)
+find_package(Ceres REQUIRED)
+find_package(flann REQUIRED)
+find_package(TinyGLTF REQUIRED)
+find_package(draco REQUIRED)
+find_package(nlohmann_json 3 REQUIRED)
+find_package(spdlog REQUIRED)
+find_package(SQLite3 REQUIRED)
+find_package(TBB REQUIRED)
+find_package(CLI11 REQUIRED)
+find_package(Threads REQUIRED)
+if(GLAM_BUILD_TESTS)
+  find_package(GTest REQUIRED)
+endif()
+if(GLAM_BUILD_BENCH)
+  find_package(benchmark REQUIRED)
+endif()
+find_package(PkgConfig REQUIRED)
+pkg_check_modules(HTTPLIB REQUIRED IMPORTED_TARGET cpp-httplib)

@@ -1,0 +1,60 @@
+# Helpers that give every GLAM target the same include root, warnings and sanitizers.
+include(GoogleTest)
+
+# Include paths are rooted at the project: #include "engine/core/sim3.h".
+
+set(GLAM_WARNINGS -Wall -Wextra -Wpedantic -Wshadow=local -Wnon-virtual-dtor)
+if(GLAM_WERROR)
+  list(APPEND GLAM_WARNINGS -Werror)
+endif()
+
+if(GLAM_SANITIZE)
+  add_compile_options(-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined)
+  add_link_options(-fsanitize=address,undefined)
+endif()
+
+function(glam_target_defaults target)
+  target_compile_options(${target} PRIVATE ${GLAM_WARNINGS})
+  target_include_directories(${target} PUBLIC "${PROJECT_SOURCE_DIR}")
+endfunction()
+
+# glam_add_library(name SOURCES a.cc b.cc DEPS dep1 dep2)
+function(glam_add_library name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS" ${ARGN})
+  add_library(${name} STATIC ${ARG_SOURCES})
+  glam_target_defaults(${name})
+  target_link_libraries(${name} PUBLIC ${ARG_DEPS})
+endfunction()
+
+# glam_add_test(name SOURCES a_test.cc DEPS lib [NEEDS_CLI] [LABELS l] [FIXTURES f] [TIMEOUT s])
+# One gtest executable; each TEST becomes its own CTest entry (discovered before test run,
+# so a build never executes test binaries).
+function(glam_add_test name)
+  cmake_parse_arguments(ARG "NEEDS_CLI" "TIMEOUT" "SOURCES;DEPS;LABELS;FIXTURES" ${ARGN})
+  add_executable(${name} ${ARG_SOURCES})
+  glam_target_defaults(${name})
+  target_link_libraries(${name} PRIVATE ${ARG_DEPS} GTest::gtest GTest::gtest_main GTest::gmock)
+  # Tests find the CLI and the shared synthetic clips (CTest fixtures) through these.
+  target_compile_definitions(${name} PRIVATE
+    GLAM_TEST_FIXTURES_DIR="${CMAKE_BINARY_DIR}/fixtures"
+    GLAM_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
+  if(ARG_NEEDS_CLI)
+    # Tests that drive the `glam` executable (end-to-end, CLI error handling).
+    target_compile_definitions(${name} PRIVATE GLAM_BIN="$<TARGET_FILE:glam>")
+    add_dependencies(${name} glam)
+  endif()
+  if(NOT ARG_TIMEOUT)
+    set(ARG_TIMEOUT 300)
+  endif()
+  set(props TIMEOUT ${ARG_TIMEOUT})
+  if(ARG_LABELS)
+    list(APPEND props LABELS "${ARG_LABELS}")
+  endif()
+  if(ARG_FIXTURES)
+    list(APPEND props FIXTURES_REQUIRED "${ARG_FIXTURES}")
+  endif()
+  gtest_discover_tests(${name}
+    DISCOVERY_MODE PRE_TEST
+    WORKING_DIRECTORY "${CMAKE_BINARY_DIR}"
+    PROPERTIES ${props})
+endfunction()
