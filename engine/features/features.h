@@ -1,0 +1,32 @@
+// Point features of one image: what the tracker matches, what landmarks inherit (descriptor,
+// colour), what the vocabulary tree indexes. Keypoint coordinates are in processing pixels
+// (OpenCV convention: pixel centres at integer coordinates).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+namespace glam {
+
+using Rgb = std::array<uint8_t, 3>;
+
+struct Features {
+  std::vector<cv::KeyPoint> keypoints;
+  // N x 128, CV_32F, one row per keypoint (RootSIFT-normalised when the extractor was asked
+  // to: then every row has unit L2 norm).
+  cv::Mat descriptors;
+  std::vector<Rgb> colors;  // RGB sampled at each keypoint (for landmark colour)
+
+  size_t size() const { return keypoints.size(); }
+  bool empty() const { return keypoints.empty(); }
+  Eigen::Vector2d point(size_t i) const {
+    return {keypoints[i].pt.x, keypoints[i].pt.y};
+  }
+  std::vector<Eigen::Vector2d> points() const;
+};
+
+}  // namespace glam

@@ -1,0 +1,129 @@
+#include "engine/features/sift_extractor.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <opencv2/imgproc.hpp>
+
+#include "engine/core/error.h"
+#include "engine/core/options.h"
+
+namespace glam {
+
+std::vector<Eigen::Vector2d> Features::points() const {
+  std::vector<Eigen::Vector2d> out;
+  out.reserve(keypoints.size());
+  for (const auto& kp : keypoints) out.emplace_back(kp.pt.x, kp.pt.y);
+  return out;
+}
+
+void SiftOptions::Check() const {
+  CheckGreater("SiftOptions.max_features", max_features, 0);
+  CheckInRange("SiftOptions.contrast_threshold", contrast_threshold, 1e-5, 1.0);
+  CheckGreater("SiftOptions.edge_threshold", edge_threshold, 0.0);
+  CheckGreater("SiftOptions.sigma", sigma, 0.0);
+  CheckInRange("SiftOptions.octave_layers", octave_layers, 1, 10);
+  CheckInRange("SiftOptions.grid_cols", grid_cols, 0, 1000);
+  CheckInRange("SiftOptions.grid_rows", grid_rows, 0, 1000);
+  if ((grid_cols == 0) != (grid_rows == 0)) {
+    throw InputError("SiftOptions.grid_cols and grid_rows must both be 0 (off) or both > 0");
+  }
+  CheckInRange("SiftOptions.extraction_scale", extraction_scale, 0.05, 1.0);
+}
+
+void ApplyRootSift(cv::Mat* descriptors) {
+  GLAM_CHECK(descriptors->type() == CV_32F);
+  for (int r = 0; r < descriptors->rows; ++r) {
+    float* row = descriptors->ptr<float>(r);
+    double l1 = 0.0;
+    for (int c = 0; c < descriptors->cols; ++c) l1 += std::abs(row[c]);
+    const double inv = l1 > 0.0 ? 1.0 / l1 : 0.0;
+    for (int c = 0; c < descriptors->cols; ++c) {
+      row[c] = static_cast<float>(std::sqrt(std::abs(row[c]) * inv));
+    }
+  }
+}
+
+SiftExtractor::SiftExtractor(const SiftOptions& options) : options_(options) {
+  options_.Check();
+  // With bucketing, detect everything and choose per cell; otherwise cv::SIFT retains the
+  // max_features strongest itself before computing descriptors.
+  const bool bucketing = options_.grid_cols > 0;
+  sift_ = cv::SIFT::create(bucketing ? 0 : options_.max_features, options_.octave_layers,
+                           options_.contrast_threshold, options_.edge_threshold, options_.sigma);
+}
+
+std::vector<cv::KeyPoint> SiftExtractor::Bucket(std::vector<cv::KeyPoint> keypoints,
+                                                cv::Size size) const {
+  const size_t budget = static_cast<size_t>(options_.max_features);
+  if (keypoints.size() <= budget) return keypoints;
+  const int cols = options_.grid_cols, rows = options_.grid_rows;
+  const size_t per_cell = (budget + static_cast<size_t>(cols * rows) - 1) / (cols * rows);
+  std::stable_sort(keypoints.begin(), keypoints.end(),
+                   [](const cv::KeyPoint& a, const cv::KeyPoint& b) { return a.response > b.response; });
+  std::vector<size_t> count(static_cast<size_t>(cols * rows), 0);
+  std::vector<cv::KeyPoint> kept, leftovers;
+  kept.reserve(budget);
+  for (const auto& kp : keypoints) {
+    const int cx = std::clamp(static_cast<int>(kp.pt.x * cols / size.width), 0, cols - 1);
+    const int cy = std::clamp(static_cast<int>(kp.pt.y * rows / size.height), 0, rows - 1);
+    size_t& n = count[static_cast<size_t>(cy * cols + cx)];
+    if (n < per_cell && kept.size() < budget) {
+      ++n;
+      kept.push_back(kp);
+    } else {
+      leftovers.push_back(kp);
+    }
+  }
+  for (size_t i = 0; i < leftovers.size() && kept.size() < budget; ++i) kept.push_back(leftovers[i]);
+  return kept;
+}
+
+Features SiftExtractor::Extract(const cv::Mat& image) const {
+  GLAM_CHECK(!image.empty() && image.depth() == CV_8U &&
+             (image.channels() == 3 || image.channels() == 1));
+  cv::Mat gray;
+  if (image.channels() == 3) {
+    cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
+  } else {
+    gray = image;
+  }
+  const double scale = options_.extraction_scale;
+  if (scale < 1.0) cv::resize(gray, gray, cv::Size(), scale, scale, cv::INTER_AREA);
+
+  Features features;
+  if (options_.grid_cols > 0) {
+    sift_->detect(gray, features.keypoints);
+    features.keypoints = Bucket(std::move(features.keypoints), gray.size());
+    sift_->compute(gray, features.keypoints, features.descriptors);
+  } else {
+    sift_->detectAndCompute(gray, cv::noArray(), features.keypoints, features.descriptors);
+  }
+  if (features.descriptors.empty()) features.descriptors.create(0, 128, CV_32F);
+  if (options_.root_sift) ApplyRootSift(&features.descriptors);
+
+  if (scale < 1.0) {
+    // Pixel centres at integer coordinates: x_full = (x_small + 0.5) / s - 0.5.
+    const float inv = static_cast<float>(1.0 / scale);
+    for (auto& kp : features.keypoints) {
+      kp.pt = (kp.pt + cv::Point2f(0.5f, 0.5f)) * inv - cv::Point2f(0.5f, 0.5f);
+      kp.size *= inv;
+    }
+  }
+
+  features.colors.reserve(features.keypoints.size());
+  for (const auto& kp : features.keypoints) {
+    const int x = std::clamp(static_cast<int>(std::lround(kp.pt.x)), 0, image.cols - 1);
+    const int y = std::clamp(static_cast<int>(std::lround(kp.pt.y)), 0, image.rows - 1);
+    if (image.channels() == 3) {
+      const cv::Vec3b& bgr = image.at<cv::Vec3b>(y, x);
+      features.colors.push_back({bgr[2], bgr[1], bgr[0]});
+    } else {
+      const uint8_t g = image.at<uint8_t>(y, x);
+      features.colors.push_back({g, g, g});
+    }
+  }
+  return features;
+}
+
+}  // namespace glam

@@ -1,0 +1,57 @@
+#include "engine/pipeline/mapping_options.h"
+
+#include <algorithm>
+
+#include <fmt/format.h>
+
+#include "engine/core/error.h"
+#include "engine/core/options.h"
+
+namespace glam {
+
+void MappingOptions::Check() const {
+  source.Check();
+  sift.Check();
+  submap.Check();
+  chaining.Check();
+  leveling.Check();
+  if (intrinsics) intrinsics->Check();
+  if (focal_px) CheckGreater("MappingOptions.focal_px", *focal_px, 0.0);
+  CheckInRange("MappingOptions.default_focal_factor", default_focal_factor, 0.05, 20.0);
+  CheckGreater("MappingOptions.queue_capacity", queue_capacity, std::size_t{0});
+}
+
+Intrinsics ResolveIntrinsics(const MappingOptions& options, const FrameSourceInfo& info) {
+  const double s = info.scale;
+  Intrinsics out;
+  out.width = info.processing_size.width;
+  out.height = info.processing_size.height;
+  if (options.intrinsics) {
+    const Intrinsics& in = *options.intrinsics;
+    if (in.width != info.original_size.width || in.height != info.original_size.height) {
+      throw InputError(fmt::format(
+          "intrinsics are for {}x{} images but the input is {}x{}; give them at the video's "
+          "original resolution",
+          in.width, in.height, info.original_size.width, info.original_size.height));
+    }
+    out.model = in.model;
+    out.fx = in.fx * s;
+    out.fy = in.fy * s;
+    out.cx = (in.cx + 0.5) * s - 0.5;
+    out.cy = (in.cy + 0.5) * s - 0.5;
+    out.k1 = in.k1;  // radial coefficients act on normalised coordinates: scale-free
+    out.k2 = in.k2;
+  } else {
+    const double focal = options.focal_px
+                             ? *options.focal_px * s
+                             : options.default_focal_factor *
+                                   std::max(out.width, out.height);
+    out.fx = out.fy = focal;
+    out.cx = (out.width - 1) / 2.0;
+    out.cy = (out.height - 1) / 2.0;
+  }
+  out.Check();
+  return out;
+}
+
+}  // namespace glam

@@ -1,0 +1,44 @@
+// Everything `glam map` (and a server job) can tune, gathered in one struct so the CLI, the
+// REST API and tests configure a run the same way. Intrinsics are given by users for the
+// ORIGINAL video resolution (that is what calibration tools and spec sheets give), while the
+// engine works in processing pixels; ResolveIntrinsics does the rescaling in one place.
+#pragma once
+
+#include <cstddef>
+#include <optional>
+
+#include "engine/core/camera.h"
+#include "engine/features/sift_extractor.h"
+#include "engine/pipeline/submap_chainer.h"
+#include "engine/pipeline/world_leveling.h"
+#include "engine/submap/submap_options.h"
+#include "engine/video/frame_source.h"
+
+namespace glam {
+
+struct MappingOptions {
+  FrameSourceOptions source;
+  SiftOptions sift;
+  SubmapOptions submap;
+  ChainingOptions chaining;
+  LevelingOptions leveling;
+  // Full calibration at original resolution (e.g. from --intrinsics file.json).
+  std::optional<Intrinsics> intrinsics;
+  // Focal length in pixels at original resolution (--focal); ignored when `intrinsics` is set.
+  std::optional<double> focal_px;
+  // Without either: focal guess = this x the long side (about a 64 degree horizontal field of
+  // view, typical of drone cameras); the submap builder's focal estimation corrects it.
+  double default_focal_factor = 0.8;
+  // Frames (with features) buffered between the decoder thread and the submap builder.
+  std::size_t queue_capacity = 8;
+
+  void Check() const;  // throws InputError
+};
+
+// Intrinsics at processing size for `info`: the given calibration or focal rescaled by
+// info.scale (pixel centres at integer coordinates: c' = (c + 0.5) s - 0.5), or the default
+// guess with the principal point at the image centre. Throws InputError if a given
+// calibration's width/height do not match the input's original size.
+Intrinsics ResolveIntrinsics(const MappingOptions& options, const FrameSourceInfo& info);
+
+}  // namespace glam

@@ -1,0 +1,106 @@
+#include "engine/pipeline/world_leveling.h"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+
+#include "engine/core/logging.h"
+#include "engine/core/options.h"
+
+namespace glam {
+
+void LevelingOptions::Check() const {
+  CheckInRange("LevelingOptions.inlier_fraction", inlier_fraction, 1e-5, 1.0);
+  CheckGreater("LevelingOptions.iterations", iterations, 0);
+}
+
+namespace {
+
+struct Plane {
+  Eigen::Vector3d normal;  // unit
+  double offset = 0;       // normal . x + offset = 0
+  double Distance(const Eigen::Vector3d& x) const { return std::abs(normal.dot(x) + offset); }
+};
+
+Plane LeastSquaresPlane(const std::vector<Eigen::Vector3d>& points, const std::vector<int>& rows) {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (int r : rows) mean += points[static_cast<std::size_t>(r)];
+  mean /= static_cast<double>(rows.size());
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (int r : rows) {
+    const Eigen::Vector3d d = points[static_cast<std::size_t>(r)] - mean;
+    cov += d * d.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(cov);
+  Plane p;
+  p.normal = solver.eigenvectors().col(0).normalized();  // smallest eigenvalue
+  p.offset = -p.normal.dot(mean);
+  return p;
+}
+
+}  // namespace
+
+LevelingResult LevelGround(const std::vector<Eigen::Vector3d>& points,
+                           const std::vector<Eigen::Vector3d>& camera_centres,
+                           const LevelingOptions& options) {
+  LevelingResult result;
+  if (points.size() < 3 || camera_centres.empty()) {
+    GLAM_LOG_WARN("cannot level the world frame: {} points, {} cameras", points.size(),
+                  camera_centres.size());
+    return result;
+  }
+  Eigen::Vector3d cam_mean = Eigen::Vector3d::Zero();
+  for (const auto& c : camera_centres) cam_mean += c;
+  cam_mean /= static_cast<double>(camera_centres.size());
+  std::vector<double> ranges;
+  ranges.reserve(points.size());
+  for (const auto& p : points) ranges.push_back((p - cam_mean).norm());
+  std::nth_element(ranges.begin(), ranges.begin() + static_cast<std::ptrdiff_t>(ranges.size() / 2),
+                   ranges.end());
+  const double threshold = options.inlier_fraction * std::max(ranges[ranges.size() / 2], 1e-12);
+
+  std::mt19937 rng(options.seed);
+  std::uniform_int_distribution<int> pick(0, static_cast<int>(points.size()) - 1);
+  std::vector<int> best;
+  for (int it = 0; it < options.iterations; ++it) {
+    const auto& a = points[static_cast<std::size_t>(pick(rng))];
+    const auto& b = points[static_cast<std::size_t>(pick(rng))];
+    const auto& c = points[static_cast<std::size_t>(pick(rng))];
+    const Eigen::Vector3d n = (b - a).cross(c - a);
+    if (n.norm() < 1e-12) continue;
+    Plane plane{n.normalized(), 0};
+    plane.offset = -plane.normal.dot(a);
+    std::vector<int> inliers;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      if (plane.Distance(points[i]) <= threshold) inliers.push_back(static_cast<int>(i));
+    }
+    if (inliers.size() > best.size()) best = std::move(inliers);
+  }
+  if (best.size() < 3) return result;
+  Plane plane = LeastSquaresPlane(points, best);
+  if (plane.normal.dot(cam_mean) + plane.offset < 0) {  // cameras must be on the +normal side
+    plane.normal = -plane.normal;
+    plane.offset = -plane.offset;
+  }
+  const SO3 rotation(Eigen::Quaterniond::FromTwoVectors(plane.normal, Eigen::Vector3d::UnitZ()));
+  // In the rotated frame the plane is z = -offset; put it at z = 0 and the first camera at x = y = 0.
+  const Eigen::Vector3d first = rotation * camera_centres.front();
+  const Eigen::Vector3d translation(-first.x(), -first.y(), plane.offset);
+  result.world_from_submap = Sim3(1.0, rotation, translation);
+  result.levelled = true;
+  result.plane_inliers = static_cast<int>(best.size());
+  return result;
+}
+
+LevelingResult LevelSubmap(const Submap& submap, const LevelingOptions& options) {
+  std::vector<Eigen::Vector3d> points, centres;
+  points.reserve(submap.landmarks.size());
+  for (const Landmark& lm : submap.landmarks) points.push_back(lm.point_in_submap);
+  for (const Keyframe& kf : submap.keyframes) centres.push_back(kf.cam_from_submap.Inverse().translation());
+  return LevelGround(points, centres, options);
+}
+
+}  // namespace glam

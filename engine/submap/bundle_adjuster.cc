@@ -1,0 +1,197 @@
+#include "engine/submap/bundle_adjuster.h"
+
+#include <chrono>
+#include <cmath>
+
+#include <ceres/ceres.h>
+
+#include "engine/core/logging.h"
+#include "engine/core/options.h"
+
+namespace glam {
+namespace {
+
+// Pixel residual of one observation; parameters: rotation (Eigen quaternion x,y,z,w),
+// translation (cam_from_submap), focal, point_in_submap. Distortion and principal point are
+// constants of the camera, not refined (too weakly observed inside one submap).
+struct ReprojectionCost {
+  ReprojectionCost(const Eigen::Vector2d& observed, const Intrinsics& in)
+      : u(observed.x()), v(observed.y()), cx(in.cx), cy(in.cy), k1(in.k1), k2(in.k2),
+        aspect(in.fy / in.fx) {}
+
+  template <typename T>
+  bool operator()(const T* rotation, const T* translation, const T* focal, const T* point,
+                  T* residual) const {
+    Eigen::Map<const Eigen::Quaternion<T>> q(rotation);
+    Eigen::Map<const Eigen::Matrix<T, 3, 1>> t(translation);
+    Eigen::Map<const Eigen::Matrix<T, 3, 1>> x(point);
+    const Eigen::Matrix<T, 3, 1> p = q * x + t;
+    if (p.z() <= T(Camera::kMinDepth)) {
+      // Behind the camera: a large but finite residual keeps the solver away from here.
+      residual[0] = residual[1] = T(1e3);
+      return true;
+    }
+    const T xn = p.x() / p.z();
+    const T yn = p.y() / p.z();
+    const T r2 = xn * xn + yn * yn;
+    const T d = T(1) + T(k1) * r2 + T(k2) * r2 * r2;
+    residual[0] = focal[0] * d * xn + T(cx) - T(u);
+    residual[1] = focal[0] * T(aspect) * d * yn + T(cy) - T(v);
+    return true;
+  }
+
+  double u, v, cx, cy, k1, k2, aspect;
+};
+
+struct FocalPriorCost {
+  FocalPriorCost(double prior, double weight) : prior(prior), weight(weight) {}
+  template <typename T>
+  bool operator()(const T* focal, T* residual) const {
+    residual[0] = T(weight) * (focal[0] - T(prior)) / T(prior);
+    return true;
+  }
+  double prior, weight;
+};
+
+class CancelCallback : public ceres::IterationCallback {
+ public:
+  explicit CancelCallback(const CancellationToken& cancel) : cancel_(cancel) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary&) override {
+    return cancel_.IsCancelled() ? ceres::SOLVER_ABORT : ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  CancellationToken cancel_;
+};
+
+// Ceres works on raw arrays; poses are unpacked here and written back after solving.
+struct PoseBlock {
+  double rotation[4];  // Eigen quaternion storage order: x, y, z, w
+  double translation[3];
+  double focal;
+};
+
+double RmsReprojection(const Intrinsics& intrinsics, const std::vector<Keyframe>& keyframes,
+                       const std::vector<Landmark>& landmarks) {
+  double sum = 0;
+  std::size_t count = 0;
+  for (const Landmark& lm : landmarks) {
+    for (const Observation& obs : lm.observations) {
+      const double e = ReprojectionError(intrinsics, keyframes[obs.keyframe], lm.point_in_submap, obs.pixel);
+      sum += e * e;
+      ++count;
+    }
+  }
+  return count > 0 ? std::sqrt(sum / static_cast<double>(count)) : 0.0;
+}
+
+}  // namespace
+
+void BundleAdjustmentOptions::Check() const {
+  CheckGreater("BundleAdjustmentOptions.max_iterations", max_iterations, 0);
+  CheckGreater("BundleAdjustmentOptions.huber_pixels", huber_pixels, 0.0);
+  CheckGreaterEqual("BundleAdjustmentOptions.focal_prior_weight", focal_prior_weight, 0.0);
+  CheckGreaterEqual("BundleAdjustmentOptions.fixed_keyframes", fixed_keyframes, 1);
+  CheckGreater("BundleAdjustmentOptions.num_threads", num_threads, 0);
+}
+
+double ReprojectionError(const Intrinsics& intrinsics, const Keyframe& keyframe,
+                         const Eigen::Vector3d& point_in_submap, const Eigen::Vector2f& pixel) {
+  Intrinsics own = intrinsics;
+  own.fy = keyframe.focal * intrinsics.fy / intrinsics.fx;
+  own.fx = keyframe.focal;
+  Eigen::Vector2d projected;
+  if (!Camera(own).Project(keyframe.cam_from_submap * point_in_submap, &projected)) {
+    return std::numeric_limits<double>::infinity();
+  }
+  return (projected - pixel.cast<double>()).norm();
+}
+
+BundleAdjustmentSummary BundleAdjust(const Intrinsics& intrinsics, std::vector<Keyframe>& keyframes,
+                                     std::vector<Landmark>& landmarks,
+                                     const BundleAdjustmentOptions& options,
+                                     const CancellationToken& cancel) {
+  options.Check();
+  const auto start = std::chrono::steady_clock::now();
+  BundleAdjustmentSummary summary;
+  summary.initial_rms_pixels = RmsReprojection(intrinsics, keyframes, landmarks);
+  if (landmarks.empty()) return summary;
+
+  std::vector<PoseBlock> poses(keyframes.size());
+  for (std::size_t k = 0; k < keyframes.size(); ++k) {
+    const Eigen::Quaterniond& q = keyframes[k].cam_from_submap.rotation().quaternion();
+    poses[k] = {{q.x(), q.y(), q.z(), q.w()},
+                {keyframes[k].cam_from_submap.translation().x(),
+                 keyframes[k].cam_from_submap.translation().y(),
+                 keyframes[k].cam_from_submap.translation().z()},
+                keyframes[k].focal};
+  }
+
+  // The problem owns cost, loss and manifold objects; Ceres reference-counts the shared loss.
+  ceres::Problem problem;
+  auto* loss = new ceres::HuberLoss(options.huber_pixels);
+  std::vector<bool> keyframe_used(keyframes.size(), false);
+  for (Landmark& lm : landmarks) {
+    for (const Observation& obs : lm.observations) {
+      auto* cost = new ceres::AutoDiffCostFunction<ReprojectionCost, 2, 4, 3, 1, 3>(
+          new ReprojectionCost(obs.pixel.cast<double>(), intrinsics));
+      PoseBlock& pose = poses[obs.keyframe];
+      problem.AddResidualBlock(cost, loss, pose.rotation, pose.translation, &pose.focal,
+                               lm.point_in_submap.data());
+      keyframe_used[obs.keyframe] = true;
+    }
+  }
+
+  for (std::size_t k = 0; k < keyframes.size(); ++k) {
+    if (!keyframe_used[k]) continue;
+    PoseBlock& pose = poses[k];
+    problem.SetManifold(pose.rotation, new ceres::EigenQuaternionManifold);
+    if (static_cast<int>(k) < options.fixed_keyframes) {
+      problem.SetParameterBlockConstant(pose.rotation);
+      problem.SetParameterBlockConstant(pose.translation);
+    } else if (k == 1 && options.fix_scale && options.fixed_keyframes == 1) {
+      int largest = 0;
+      for (int i = 1; i < 3; ++i) {
+        if (std::abs(pose.translation[i]) > std::abs(pose.translation[largest])) largest = i;
+      }
+      problem.SetManifold(pose.translation, new ceres::SubsetManifold(3, {largest}));
+    }
+    if (options.refine_focal) {
+      problem.AddResidualBlock(
+          new ceres::AutoDiffCostFunction<FocalPriorCost, 1, 1>(
+              new FocalPriorCost(keyframes[k].focal, options.focal_prior_weight)),
+          nullptr, &pose.focal);
+    } else {
+      problem.SetParameterBlockConstant(&pose.focal);
+    }
+  }
+
+  ceres::Solver::Options solver_options;
+  solver_options.linear_solver_type = ceres::SPARSE_SCHUR;
+  solver_options.max_num_iterations = options.max_iterations;
+  solver_options.num_threads = options.num_threads;
+  solver_options.logging_type = ceres::SILENT;
+  CancelCallback cancel_callback(cancel);
+  solver_options.callbacks.push_back(&cancel_callback);
+  ceres::Solver::Summary ceres_summary;
+  ceres::Solve(solver_options, &problem, &ceres_summary);
+  cancel.ThrowIfCancelled();
+
+  for (std::size_t k = 0; k < keyframes.size(); ++k) {
+    const PoseBlock& pose = poses[k];
+    keyframes[k].cam_from_submap =
+        SE3(SO3(Eigen::Quaterniond(pose.rotation[3], pose.rotation[0], pose.rotation[1], pose.rotation[2])),
+            Eigen::Vector3d(pose.translation[0], pose.translation[1], pose.translation[2]));
+    keyframes[k].focal = pose.focal;
+  }
+  summary.final_rms_pixels = RmsReprojection(intrinsics, keyframes, landmarks);
+  summary.iterations = static_cast<int>(ceres_summary.iterations.size());
+  summary.converged = ceres_summary.termination_type == ceres::CONVERGENCE;
+  summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  GLAM_LOG_DEBUG("BA: {} keyframes, {} landmarks, rms {:.3f} -> {:.3f} px in {} iterations ({:.3f} s)",
+                 keyframes.size(), landmarks.size(), summary.initial_rms_pixels,
+                 summary.final_rms_pixels, summary.iterations, summary.seconds);
+  return summary;
+}
+
+}  // namespace glam

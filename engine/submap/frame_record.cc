@@ -1,0 +1,44 @@
+#include "engine/submap/frame_record.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace glam {
+
+Descriptor QuantizeDescriptor(const float* row) {
+  Descriptor d;
+  for (int i = 0; i < kDescriptorSize; ++i) {
+    d[i] = static_cast<std::uint8_t>(std::clamp(std::lround(512.0f * row[i]), 0L, 255L));
+  }
+  return d;
+}
+
+void DequantizeDescriptor(const Descriptor& d, float* row) {
+  for (int i = 0; i < kDescriptorSize; ++i) row[i] = static_cast<float>(d[i]) / 512.0f;
+}
+
+CompactFeatures CompactFeatures::From(const Features& features) {
+  CompactFeatures c;
+  c.points.reserve(features.size());
+  c.descriptors.reserve(features.size());
+  for (std::size_t i = 0; i < features.size(); ++i) {
+    c.points.emplace_back(features.keypoints[i].pt.x, features.keypoints[i].pt.y);
+    c.descriptors.push_back(QuantizeDescriptor(features.descriptors.ptr<float>(static_cast<int>(i))));
+  }
+  c.colors = features.colors;
+  return c;
+}
+
+cv::Mat CompactFeatures::FloatDescriptors() const {
+  cv::Mat out(static_cast<int>(descriptors.size()), kDescriptorSize, CV_32F);
+  for (int i = 0; i < out.rows; ++i) DequantizeDescriptor(descriptors[i], out.ptr<float>(i));
+  return out;
+}
+
+cv::Mat CompactFeatures::FloatDescriptors(const std::vector<int>& rows) const {
+  cv::Mat out(static_cast<int>(rows.size()), kDescriptorSize, CV_32F);
+  for (int i = 0; i < out.rows; ++i) DequantizeDescriptor(descriptors[rows[i]], out.ptr<float>(i));
+  return out;
+}
+
+}  // namespace glam

@@ -1,0 +1,46 @@
+// What thread 1 remembers about each frame of the open submap. Features are kept compact
+// (float32 pixel positions, uint8 descriptors: ~270 KB per 2000-feature frame instead of
+// ~1 MB) because the submap hand-off replays the last 10 % of frames into the next submap, and
+// the middle keyframe is chosen among past frames. Memory is bounded by
+// SubmapOptions::max_frames_per_submap, not by video length.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <utility>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "engine/core/se3.h"
+#include "engine/features/features.h"
+#include "engine/map/landmark.h"
+
+namespace glam {
+
+struct CompactFeatures {
+  std::vector<Eigen::Vector2f> points;
+  std::vector<Descriptor> descriptors;
+  std::vector<Rgb> colors;
+
+  static CompactFeatures From(const Features& features);
+  std::size_t size() const { return points.size(); }
+  // N x 128 CV_32F, the inverse of the quantisation in From() (to within 1/512).
+  cv::Mat FloatDescriptors() const;
+  cv::Mat FloatDescriptors(const std::vector<int>& rows) const;
+};
+
+// Quantises one RootSIFT/SIFT float row (unit L2 norm) to bytes: min(255, round(512 v)).
+Descriptor QuantizeDescriptor(const float* row);
+void DequantizeDescriptor(const Descriptor& d, float* row);
+
+struct FrameRecord {
+  std::int64_t index = 0;
+  double timestamp_s = 0;
+  CompactFeatures features;
+  std::optional<SE3> cam_from_submap;  // set when tracking posed the frame
+  // (feature index, landmark id) of the PnP inliers.
+  std::vector<std::pair<int, std::uint32_t>> landmark_matches;
+};
+
+}  // namespace glam

@@ -1,0 +1,194 @@
+// New keyframes (paper, "Keyframes"): when PnP inliers fall below tau_resection, the frame
+// halfway between the previous keyframe and the current frame becomes the *middle* keyframe
+// (its PnP pose and inliers become BA observations), essential-matrix RANSAC between the
+// middle keyframe and the current frame selects geometrically consistent matches, these are
+// triangulated with the two PnP poses, each new landmark takes the middle keyframe's
+// descriptor, new landmarks whose descriptor matches an existing landmark are removed as
+// duplicates, and the current frame becomes a keyframe. Then bundle adjustment and the
+// outlier filters run, and the focal estimate is updated.
+#include <algorithm>
+#include <cmath>
+#include <unordered_set>
+
+#include "engine/core/logging.h"
+#include "engine/features/feature_matcher.h"
+#include "engine/geometry/essential.h"
+#include "engine/geometry/triangulation.h"
+#include "engine/submap/submap_builder.h"
+
+namespace glam {
+
+void SubmapBuilder::AddKeyframe(std::size_t position) {
+  FrameRecord& frame = open_.frames[position];
+  GLAM_CHECK(frame.cam_from_submap.has_value(), "keyframe without pose");
+  const auto keyframe_index = static_cast<std::uint32_t>(open_.keyframes.size());
+  Keyframe kf;
+  kf.frame_index = frame.index;
+  kf.cam_from_submap = *frame.cam_from_submap;
+  kf.focal = focal_;
+  open_.keyframes.push_back(kf);
+  open_.keyframe_frame_positions.push_back(position);
+  for (const auto& [feature, landmark_id] : frame.landmark_matches) {
+    auto it = std::lower_bound(open_.landmarks.begin(), open_.landmarks.end(), landmark_id,
+                               [](const Landmark& lm, std::uint32_t v) { return lm.id < v; });
+    if (it == open_.landmarks.end() || it->id != landmark_id) continue;  // filtered meanwhile
+    it->observations.push_back({keyframe_index, frame.features.points[feature]});
+  }
+  ++stats_.keyframes;
+}
+
+void SubmapBuilder::InsertKeyframes(std::size_t current_position) {
+  const std::size_t previous = open_.keyframe_frame_positions.back();
+  if (current_position <= previous) return;
+  // Middle keyframe: the posed frame closest to halfway.
+  std::optional<std::size_t> middle;
+  const std::size_t half = (previous + current_position) / 2;
+  for (std::size_t d = 0; d <= current_position - previous && !middle; ++d) {
+    for (std::size_t p : {half - std::min(d, half), half + d}) {
+      if (p > previous && p < current_position && open_.frames[p].cam_from_submap) {
+        middle = p;
+        break;
+      }
+    }
+  }
+  if (middle) {
+    AddKeyframe(*middle);
+    TriangulateBetween(*middle, current_position);
+  } else {
+    TriangulateBetween(previous, current_position);
+  }
+  AddKeyframe(current_position);
+  OptimiseAndFilter();
+}
+
+std::size_t SubmapBuilder::TriangulateBetween(std::size_t first_position, std::size_t second_position) {
+  FrameRecord& first = open_.frames[first_position];
+  FrameRecord& second = open_.frames[second_position];
+  const Camera camera = CurrentCamera();
+
+  // Features already explaining an existing landmark are not triangulated again.
+  std::unordered_set<int> used_first, used_second;
+  for (const auto& m : first.landmark_matches) used_first.insert(m.first);
+  for (const auto& m : second.landmark_matches) used_second.insert(m.first);
+  std::vector<int> rows_first, rows_second;
+  for (int i = 0; i < static_cast<int>(first.features.size()); ++i)
+    if (!used_first.count(i)) rows_first.push_back(i);
+  for (int i = 0; i < static_cast<int>(second.features.size()); ++i)
+    if (!used_second.count(i)) rows_second.push_back(i);
+  if (rows_first.size() < 8 || rows_second.size() < 8) return 0;
+
+  MatchOptions match_options;
+  match_options.ratio = static_cast<float>(options_.match_ratio);
+  match_options.mutual = true;
+  const cv::Mat first_descriptors = first.features.FloatDescriptors(rows_first);
+  const std::vector<Match> matches =
+      MatchDescriptors(second.features.FloatDescriptors(rows_second), first_descriptors, match_options);
+  if (matches.size() < 8) return 0;
+
+  std::vector<TwoViewCorrespondence> rays;
+  for (const Match& m : matches) {
+    rays.push_back({camera.Unproject(first.features.points[rows_first[m.train]].cast<double>()).head<2>(),
+                    camera.Unproject(second.features.points[rows_second[m.query]].cast<double>()).head<2>()});
+  }
+  RansacOptions ransac;
+  ransac.inlier_threshold = options_.pnp_threshold_pixels;
+  // The essential matrix only selects consistent matches; triangulation checks depth and angle.
+  const RelativePoseResult rel = EstimateRelativePose(rays, camera.intrinsics().fx, ransac, 1e4);
+  GLAM_LOG_TRACE("keyframe pair {}-{}: {} unmatched x {} unmatched features, {} matches, {} essential inliers",
+                 first.index, second.index, rows_first.size(), rows_second.size(), matches.size(),
+                 rel.num_inliers);
+  if (!rel.success) return 0;
+
+  // Triangulated with the two PnP poses (not the essential matrix's relative pose).
+  const SE3 poses[2] = {*first.cam_from_submap, *second.cam_from_submap};
+  const Eigen::Vector3d centre_first = CameraCenter(poses[0]);
+  TriangulationOptions tri_options;
+  tri_options.min_angle_deg = options_.min_triangulation_angle_deg;
+  tri_options.max_error_px = options_.max_new_point_reprojection_pixels;
+  tri_options.focal_px = camera.intrinsics().fx;
+
+  struct NewPoint {
+    int feature_first, feature_second;
+    Eigen::Vector3d point;
+  };
+  std::vector<NewPoint> candidates;
+  int status_counts[6] = {0, 0, 0, 0, 0, 0};
+  for (std::size_t i = 0; i < matches.size(); ++i) {
+    if (!rel.inlier_mask[i]) continue;
+    const Eigen::Vector2d obs[2] = {rays[i].x1, rays[i].x2};
+    const Triangulation t = Triangulate(poses, obs, tri_options);
+    ++status_counts[static_cast<int>(t.status)];
+    if (!t.ok()) continue;
+    candidates.push_back({rows_first[matches[i].train], rows_second[matches[i].query], t.point});
+  }
+  GLAM_LOG_TRACE("triangulation: ok {}, degenerate {}, small angle {}, behind {}, large error {}",
+                 status_counts[0], status_counts[2], status_counts[3], status_counts[4], status_counts[5]);
+  if (candidates.empty()) return 0;
+
+  // Duplicate removal: a new landmark whose descriptor matches an existing one is dropped.
+  std::vector<bool> duplicate(candidates.size(), false);
+  if (!open_.landmarks.empty()) {
+    std::vector<int> candidate_rows;
+    for (const NewPoint& c : candidates) candidate_rows.push_back(c.feature_first);
+    cv::Mat existing(static_cast<int>(open_.landmarks.size()), kDescriptorSize, CV_32F);
+    for (int r = 0; r < existing.rows; ++r) DequantizeDescriptor(open_.landmarks[r].descriptor, existing.ptr<float>(r));
+    MatchOptions dup_options;
+    dup_options.ratio = static_cast<float>(options_.match_ratio);
+    for (const Match& m : MatchDescriptors(first.features.FloatDescriptors(candidate_rows), existing, dup_options)) {
+      duplicate[m.query] = true;
+    }
+  }
+
+  const auto kf_first = static_cast<std::uint32_t>(open_.keyframes.size() - 1);  // middle (or previous) keyframe
+  const auto kf_second = static_cast<std::uint32_t>(open_.keyframes.size());     // current, added next
+  (void)kf_second;
+  std::size_t added = 0;
+  for (std::size_t i = 0; i < candidates.size(); ++i) {
+    if (duplicate[i]) continue;
+    const NewPoint& c = candidates[i];
+    Landmark lm;
+    lm.id = open_.next_landmark_id++;
+    lm.point_in_submap = c.point;
+    lm.descriptor = first.features.descriptors[c.feature_first];
+    lm.color = first.features.colors[c.feature_first];
+    // The first frame's keyframe already exists: observe directly. The second frame's
+    // observation is added by AddKeyframe through its landmark_matches.
+    const bool first_is_keyframe = open_.keyframe_frame_positions.back() == first_position;
+    if (first_is_keyframe) {
+      lm.observations.push_back({kf_first, first.features.points[c.feature_first]});
+    }
+    first.landmark_matches.emplace_back(c.feature_first, lm.id);
+    second.landmark_matches.emplace_back(c.feature_second, lm.id);
+    open_.extras[lm.id] = {(c.point - centre_first).normalized()};
+    open_.landmarks.push_back(std::move(lm));
+    ++added;
+  }
+  GLAM_LOG_DEBUG("triangulated {} new landmarks between frames {} and {} ({} duplicates)", added,
+                 first.index, second.index, std::count(duplicate.begin(), duplicate.end(), true));
+  return added;
+}
+
+void SubmapBuilder::OptimiseAndFilter() {
+  const Camera camera = CurrentCamera();
+  const auto summary = BundleAdjust(camera.intrinsics(), open_.keyframes, open_.landmarks,
+                                    options_.bundle_adjustment, cancel_);
+  stats_.bundle_adjust_seconds += summary.seconds;
+  RemoveReprojectionOutliers(camera.intrinsics(), open_.keyframes, open_.landmarks, options_.outlier_filter);
+  RemoveIsolatedLandmarks(open_.landmarks, options_.outlier_filter);
+  // Keyframe frames take their refined poses (tracking continues from them).
+  for (std::size_t k = 0; k < open_.keyframes.size(); ++k) {
+    open_.frames[open_.keyframe_frame_positions[k]].cam_from_submap = open_.keyframes[k].cam_from_submap;
+  }
+  UpdateFocalEstimate();
+}
+
+void SubmapBuilder::UpdateFocalEstimate() {
+  // Median over the keyframes of completed submaps and the open one's current estimates.
+  std::vector<double> focals = completed_keyframe_focals_;
+  for (const Keyframe& kf : open_.keyframes) focals.push_back(kf.focal);
+  if (focals.empty()) return;
+  std::nth_element(focals.begin(), focals.begin() + static_cast<std::ptrdiff_t>(focals.size() / 2), focals.end());
+  focal_ = focals[focals.size() / 2];
+}
+
+}  // namespace glam

@@ -1,0 +1,43 @@
+// The paper's three outlier filters for submap landmarks:
+//   1. after every BA: observations with reprojection error above a threshold are dropped,
+//      and landmarks left with fewer than two observations go with them;
+//   2. after every BA: points far from the rest of the scene (near-parallel rays give small
+//      reprojection error but wild depth) — mean distance to the k = 30 nearest neighbours
+//      (kd-tree) more than 2 standard deviations above the mean of that statistic;
+//   3. at completion: points whose reprojection error is large in every frame (see
+//      submap completion).
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include "engine/core/camera.h"
+#include "engine/map/keyframe.h"
+#include "engine/map/landmark.h"
+
+namespace glam {
+
+struct OutlierFilterOptions {
+  double max_reprojection_pixels = 4.0;
+  int min_observations = 2;
+  int neighbours = 30;        // k of the paper
+  double max_std_devs = 2.0;  // the paper's 2 sigma
+
+  void Check() const;
+};
+
+// Filter 1. Returns the number of landmarks removed.
+std::size_t RemoveReprojectionOutliers(const Intrinsics& intrinsics,
+                                       const std::vector<Keyframe>& keyframes,
+                                       std::vector<Landmark>& landmarks,
+                                       const OutlierFilterOptions& options);
+
+// Filter 2. Returns the number of landmarks removed. With fewer than k + 1 points nothing is
+// removed (the statistic is meaningless there).
+std::size_t RemoveIsolatedLandmarks(std::vector<Landmark>& landmarks, const OutlierFilterOptions& options);
+
+// Mean distance of each point to its k nearest neighbours (itself excluded). Exposed for tests
+// and for diagnostics.
+std::vector<double> MeanNeighbourDistances(const std::vector<Eigen::Vector3d>& points, int k);
+
+}  // namespace glam

@@ -1,0 +1,175 @@
+#include "engine/submap/submap_builder.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "engine/core/logging.h"
+
+namespace glam {
+
+SubmapBuilder::SubmapBuilder(const Intrinsics& intrinsics, const SubmapOptions& options,
+                             CancellationToken cancel)
+    : intrinsics_(intrinsics), options_(options), cancel_(std::move(cancel)), focal_(intrinsics.fx) {
+  intrinsics_.Check();
+  options_.Check();
+}
+
+Camera SubmapBuilder::CurrentCamera() const {
+  Intrinsics in = intrinsics_;
+  in.fy = focal_ * intrinsics_.fy / intrinsics_.fx;
+  in.fx = focal_;
+  return Camera(in);
+}
+
+std::optional<std::int64_t> SubmapBuilder::open_submap_first_frame() const {
+  if (open_.frames.empty()) return std::nullopt;
+  return open_.frames.front().index;
+}
+
+const Landmark* SubmapBuilder::FindLandmark(std::uint32_t id) const {
+  // Landmarks are appended with increasing ids and filters keep the order, so ids are sorted.
+  auto it = std::lower_bound(open_.landmarks.begin(), open_.landmarks.end(), id,
+                             [](const Landmark& lm, std::uint32_t v) { return lm.id < v; });
+  return (it != open_.landmarks.end() && it->id == id) ? &*it : nullptr;
+}
+
+std::vector<Submap> SubmapBuilder::AddFrame(std::int64_t index, double timestamp_s,
+                                            const Features& features) {
+  cancel_.ThrowIfCancelled();
+  ++stats_.frames_seen;
+  FrameRecord record;
+  record.index = index;
+  record.timestamp_s = timestamp_s;
+  record.features = CompactFeatures::From(features);
+  std::vector<Submap> completed;
+  Process(std::move(record), &completed);
+  return completed;
+}
+
+void SubmapBuilder::StartSubmapAt(std::deque<FrameRecord> frames) {
+  open_ = OpenSubmap{};
+  open_.frames = std::move(frames);
+  for (FrameRecord& f : open_.frames) {
+    f.cam_from_submap.reset();
+    f.landmark_matches.clear();
+  }
+}
+
+void SubmapBuilder::Process(FrameRecord record, std::vector<Submap>* completed) {
+  if (!open_.bootstrapped) {
+    open_.frames.push_back(std::move(record));
+    TryBootstrap();
+    return;
+  }
+  open_.frames.push_back(std::move(record));
+  FrameRecord& current = open_.frames.back();
+  if (!Track(current)) {
+    ++stats_.tracking_losses;
+    GLAM_LOG_INFO("tracking lost at frame {}: closing submap, bootstrapping a new one", current.index);
+    FrameRecord lost = std::move(current);
+    open_.frames.pop_back();
+    if (static_cast<int>(open_.keyframes.size()) >= 3) {
+      completed->push_back(Complete());
+    } else {
+      ++stats_.submaps_discarded;
+    }
+    std::deque<FrameRecord> restart;
+    restart.push_back(std::move(lost));
+    StartSubmapAt(std::move(restart));
+    return;
+  }
+  ++stats_.frames_tracked;
+  const int inliers = static_cast<int>(current.landmark_matches.size());
+  GLAM_LOG_TRACE("frame {}: {} PnP inliers of {} landmarks (tau_resection {})", current.index, inliers,
+                 open_.landmarks.size(), open_.tau_resection);
+  // Paper rule: a new keyframe when inliers fall below tau_resection. Added guard: not before
+  // the parallax to the previous keyframe allows triangulating between the middle keyframe
+  // and this frame, unless tracking is about to be lost.
+  if (inliers < open_.tau_resection &&
+      (ParallaxToLastKeyframeDeg(current) >= 2.0 * options_.min_triangulation_angle_deg ||
+       inliers < 2 * options_.min_tracking_inliers)) {
+    InsertKeyframes(open_.frames.size() - 1);
+  }
+
+  if (static_cast<int>(open_.keyframes.size()) >= options_.keyframes_per_submap ||
+      static_cast<int>(open_.frames.size()) >= options_.max_frames_per_submap) {
+    HandOffOverlap(completed);
+  }
+}
+
+double SubmapBuilder::ParallaxToLastKeyframeDeg(const FrameRecord& frame) const {
+  const Eigen::Vector3d keyframe_centre = open_.keyframes.back().cam_from_submap.Inverse().translation();
+  const Eigen::Vector3d frame_centre = frame.cam_from_submap->Inverse().translation();
+  std::vector<double> angles;
+  for (const auto& [feature, id] : frame.landmark_matches) {
+    if (const Landmark* lm = FindLandmark(id)) {
+      const Eigen::Vector3d a = (lm->point_in_submap - keyframe_centre).normalized();
+      const Eigen::Vector3d b = (lm->point_in_submap - frame_centre).normalized();
+      angles.push_back(std::acos(std::clamp(a.dot(b), -1.0, 1.0)) * 180.0 / M_PI);
+    }
+  }
+  if (angles.empty()) return 0;
+  std::nth_element(angles.begin(), angles.begin() + static_cast<std::ptrdiff_t>(angles.size() / 2), angles.end());
+  return angles[angles.size() / 2];
+}
+
+std::vector<Submap> SubmapBuilder::Finish() {
+  std::vector<Submap> completed;
+  // End of input: give the open submap its best chance to be kept. A pending bootstrap takes
+  // the last frame as second keyframe if the parallax allows; a submap with fewer than three
+  // keyframes makes its last tracked frame a keyframe.
+  if (!open_.bootstrapped && open_.frames.size() >= 2) {
+    finishing_ = true;
+    TryBootstrap();
+    finishing_ = false;
+  }
+  if (open_.bootstrapped && static_cast<int>(open_.keyframes.size()) < 3) {
+    // The posed non-keyframe farthest from every keyframe becomes one more keyframe.
+    std::optional<std::size_t> best;
+    std::size_t best_gap = 0;
+    for (std::size_t p = 0; p < open_.frames.size(); ++p) {
+      if (!open_.frames[p].cam_from_submap) continue;
+      std::size_t gap = open_.frames.size();
+      for (std::size_t k : open_.keyframe_frame_positions) gap = std::min(gap, k > p ? k - p : p - k);
+      if (gap > best_gap) {
+        best_gap = gap;
+        best = p;
+      }
+    }
+    if (best && best_gap >= 2) {
+      AddKeyframe(*best);
+      OptimiseAndFilter();
+    }
+  }
+  if (open_.bootstrapped && static_cast<int>(open_.keyframes.size()) >= 3) {
+    completed.push_back(Complete());
+  } else if (!open_.frames.empty()) {
+    ++stats_.submaps_discarded;
+    GLAM_LOG_INFO("end of input: open submap with {} keyframes and {} frames discarded",
+                  open_.keyframes.size(), open_.frames.size());
+  }
+  open_ = OpenSubmap{};
+  return completed;
+}
+
+void SubmapBuilder::HandOffOverlap(std::vector<Submap>* completed) {
+  const std::size_t n = open_.frames.size();
+  const std::size_t overlap =
+      std::max<std::size_t>(2, static_cast<std::size_t>(std::ceil(options_.overlap_fraction * n)));
+  std::deque<FrameRecord> replay(open_.frames.end() - static_cast<std::ptrdiff_t>(std::min(overlap, n)),
+                                 open_.frames.end());
+  completed->push_back(Complete());
+  // The next submap bootstraps from the overlap's first frame and re-tracks the rest.
+  FrameRecord first = std::move(replay.front());
+  replay.pop_front();
+  std::deque<FrameRecord> start;
+  start.push_back(std::move(first));
+  StartSubmapAt(std::move(start));
+  for (FrameRecord& f : replay) {
+    f.cam_from_submap.reset();
+    f.landmark_matches.clear();
+    Process(std::move(f), completed);
+  }
+}
+
+}  // namespace glam

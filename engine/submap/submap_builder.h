@@ -1,0 +1,119 @@
+// Thread 1 of GLAM: turns a stream of frame features into completed, rigid submaps (paper,
+// "Local Submap Creation"). One instance per job; not thread-safe (it *is* the thread).
+//
+// Per frame: bootstrap (first keyframe fixed at the origin, essential-matrix RANSAC until
+// the second keyframe), or tracking (landmarks projected with a constant-velocity prediction,
+// guided descriptor matching, EPnP RANSAC). When PnP inliers fall below tau_resection a middle
+// keyframe and the current frame become keyframes, new landmarks are triangulated between
+// them and everything is bundle adjusted. At keyframes_per_submap keyframes the submap is
+// completed: all its frames are relocalised against the final landmarks, and the next submap
+// starts at the first frame of the last 10 % of this one's frames (replayed from memory), so
+// consecutive submaps share ground. Tracking loss closes the submap at the previous frame and
+// bootstraps a new one at the current frame.
+#pragma once
+
+#include <cstdint>
+#include <deque>
+#include <optional>
+#include <unordered_map>
+#include <vector>
+
+#include "engine/core/camera.h"
+#include "engine/core/cancellation.h"
+#include "engine/features/features.h"
+#include "engine/map/submap.h"
+#include "engine/submap/frame_record.h"
+#include "engine/submap/submap_options.h"
+
+namespace glam {
+
+struct SubmapBuilderStats {
+  std::int64_t frames_seen = 0;
+  std::int64_t frames_tracked = 0;   // posed by tracking (before relocalisation)
+  std::int64_t keyframes = 0;        // over all submaps
+  std::int64_t submaps_completed = 0;
+  std::int64_t submaps_discarded = 0;  // closed with < 3 keyframes
+  std::int64_t tracking_losses = 0;
+  double bundle_adjust_seconds = 0;
+};
+
+class SubmapBuilder {
+ public:
+  // `intrinsics` at processing size; its fx is the initial focal guess, refined by BA.
+  SubmapBuilder(const Intrinsics& intrinsics, const SubmapOptions& options,
+                CancellationToken cancel = {});
+
+  // Consumes the features of the next frame (increasing index). Returns the submaps this
+  // frame completed (usually none, rarely two when a replayed overlap completes at once).
+  std::vector<Submap> AddFrame(std::int64_t index, double timestamp_s, const Features& features);
+
+  // End of input: closes the open submap if it has >= 3 keyframes.
+  std::vector<Submap> Finish();
+
+  // Running median of all keyframes' refined focal lengths (the paper's focal estimate).
+  double focal() const { return focal_; }
+  const SubmapBuilderStats& stats() const { return stats_; }
+  // Id the next completed submap will get; also the number of submaps emitted so far.
+  std::uint32_t next_submap_id() const { return next_submap_id_; }
+  // Frame index of the first frame of the open submap (resume point), if any.
+  std::optional<std::int64_t> open_submap_first_frame() const;
+
+ private:
+  // Per-landmark data needed only while the submap is open.
+  struct LandmarkExtra {
+    Eigen::Vector3d first_view_direction;  // unit, submap frame
+  };
+  struct OpenSubmap {
+    std::deque<FrameRecord> frames;
+    std::vector<Keyframe> keyframes;
+    std::vector<std::size_t> keyframe_frame_positions;  // position in `frames`
+    std::vector<Landmark> landmarks;
+    std::unordered_map<std::uint32_t, LandmarkExtra> extras;
+    std::uint32_t next_landmark_id = 0;
+    int tau_resection = 0;
+    int tau_stereo = 0;
+    bool bootstrapped = false;
+    std::size_t bootstrap_first = 0;  // position of the first keyframe candidate in `frames`
+  };
+
+  void Process(FrameRecord record, std::vector<Submap>* completed);
+  // Median angle (degrees) between the rays from the last keyframe and from `frame` to the
+  // landmarks `frame` tracks.
+  double ParallaxToLastKeyframeDeg(const FrameRecord& frame) const;
+
+  // bootstrap.cc: returns true once the second keyframe exists.
+  bool TryBootstrap();
+  void StartSubmapAt(std::deque<FrameRecord> frames);
+
+  // tracking.cc: poses `record` against the landmarks; false if tracking is lost.
+  bool Track(FrameRecord& record);
+  bool Localise(FrameRecord& record, const std::optional<SE3>& predicted) const;
+  std::optional<SE3> PredictPose() const;
+
+  // keyframe_insertion.cc
+  void InsertKeyframes(std::size_t current_position);
+  void AddKeyframe(std::size_t position);
+  std::size_t TriangulateBetween(std::size_t first_position, std::size_t second_position);
+  void OptimiseAndFilter();
+  void UpdateFocalEstimate();
+
+  // submap_completion.cc
+  Submap Complete();
+  void RelocaliseFrames();
+  void HandOffOverlap(std::vector<Submap>* completed);
+
+  Camera CurrentCamera() const;
+  const Landmark* FindLandmark(std::uint32_t id) const;
+
+  Intrinsics intrinsics_;
+  SubmapOptions options_;
+  CancellationToken cancel_;
+  double focal_;
+  std::vector<double> completed_keyframe_focals_;  // for the running median
+  OpenSubmap open_;
+  bool finishing_ = false;  // end of input: bootstrap accepts any frame with enough parallax
+  std::uint32_t next_submap_id_ = 0;
+  SubmapBuilderStats stats_;
+};
+
+}  // namespace glam

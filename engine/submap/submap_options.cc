@@ -1,0 +1,50 @@
+#include "engine/submap/submap_options.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "engine/core/options.h"
+
+namespace glam {
+namespace {
+
+int Scaled(int tau, int features, int reference) {
+  const double ratio = std::clamp(static_cast<double>(features) / reference, 0.1, 1.0);
+  return std::max(1, static_cast<int>(std::lround(tau * ratio)));
+}
+
+}  // namespace
+
+void SubmapOptions::Check() const {
+  CheckGreater("SubmapOptions.tau_resection", tau_resection, 0);
+  CheckGreater("SubmapOptions.tau_stereo", tau_stereo, 0);
+  CheckInRange("SubmapOptions.alpha_stereo_deg", alpha_stereo_deg, 1.0, 90.0);
+  CheckGreaterEqual("SubmapOptions.keyframes_per_submap", keyframes_per_submap, 3);
+  CheckInRange("SubmapOptions.overlap_fraction", overlap_fraction, 0.0, 0.5);
+  CheckGreater("SubmapOptions.reference_features", reference_features, 0);
+  CheckInRange("SubmapOptions.min_bootstrap_parallax_deg", min_bootstrap_parallax_deg, 0.1, 30.0);
+  CheckGreater("SubmapOptions.max_bootstrap_frames", max_bootstrap_frames, 1);
+  CheckGreaterEqual("SubmapOptions.min_tracking_inliers", min_tracking_inliers, 6);
+  CheckInRange("SubmapOptions.max_view_angle_deg", max_view_angle_deg, 1.0, 180.0);
+  CheckInRange("SubmapOptions.match_radius_fraction", match_radius_fraction, 0.001, 1.0);
+  CheckInRange("SubmapOptions.match_ratio", match_ratio, 0.1, 1.0);
+  CheckGreater("SubmapOptions.pnp_threshold_pixels", pnp_threshold_pixels, 0.0);
+  CheckInRange("SubmapOptions.min_triangulation_angle_deg", min_triangulation_angle_deg, 0.0, 45.0);
+  CheckGreater("SubmapOptions.max_new_point_reprojection_pixels", max_new_point_reprojection_pixels, 0.0);
+  CheckGreaterEqual("SubmapOptions.max_frames_per_submap", max_frames_per_submap, 10);
+  if (min_tracking_inliers >= tau_resection) {
+    throw InputError("SubmapOptions.min_tracking_inliers must be below tau_resection");
+  }
+  bundle_adjustment.Check();
+  outlier_filter.Check();
+}
+
+int SubmapOptions::EffectiveTauResection(int features) const {
+  return std::max(Scaled(tau_resection, features, reference_features), min_tracking_inliers + 1);
+}
+
+int SubmapOptions::EffectiveTauStereo(int features) const {
+  return Scaled(tau_stereo, features, reference_features);
+}
+
+}  // namespace glam

@@ -1,0 +1,65 @@
+// Options of thread 1 (local submap creation), defaults from the GLAM paper where it gives
+// them. Inlier thresholds in the paper (tau_resection = 500, tau_stereo = 1000) were tuned on
+// 1-megapixel frames with many features; here they scale with the number of features of the
+// submap's first keyframe:
+//     effective_tau = tau * clamp(first_keyframe_features / reference_features, 0.1, 1)
+// so the paper's values apply at `reference_features` (4000, SIFT at contrast 0.01 on a
+// 1-megapixel aerial frame) and smaller frames get proportionally smaller thresholds.
+#pragma once
+
+#include "engine/submap/bundle_adjuster.h"
+#include "engine/submap/outlier_filter.h"
+
+namespace glam {
+
+struct SubmapOptions {
+  // --- paper parameters ---
+  int tau_resection = 500;             // PnP inliers below this -> new keyframe
+  int tau_stereo = 1000;               // bootstrap: essential inliers below this -> 2nd keyframe
+  double alpha_stereo_deg = 30.0;      // bootstrap: mean triangulation angle above this -> 2nd keyframe
+  int keyframes_per_submap = 20;       // completion
+  double overlap_fraction = 0.10;      // next submap starts at the last 10 % of frames
+
+  // --- scaling of the thresholds (see file comment) ---
+  int reference_features = 4000;
+
+  // --- bootstrap ---
+  // Never take the second keyframe before the median triangulation angle reaches this: below
+  // ~2 degrees depth is too uncertain to start a map.
+  double min_bootstrap_parallax_deg = 2.0;
+  // Give up on a first keyframe after this many frames and restart the bootstrap (e.g. a
+  // hovering drone): the best candidate seen so far is taken if it has enough parallax.
+  int max_bootstrap_frames = 90;
+
+  // --- tracking ---
+  // Fewer PnP inliers than this (absolute) -> tracking lost: close the submap, start anew.
+  int min_tracking_inliers = 40;
+  // Landmarks seen from a direction this far from their first viewing direction are not
+  // matched (SIFT is not invariant to large viewpoint changes).
+  double max_view_angle_deg = 45.0;
+  // Search radius for matching projected landmarks, as a fraction of the image diagonal.
+  double match_radius_fraction = 0.04;
+  double match_ratio = 0.8;            // Lowe's ratio for descriptor matches
+  double pnp_threshold_pixels = 3.0;   // RANSAC inlier threshold (processing resolution)
+
+  // --- triangulation of new landmarks ---
+  // New keyframes also wait until the parallax to the previous keyframe is twice this, so the
+  // middle keyframe / current frame pair can triangulate.
+  double min_triangulation_angle_deg = 1.0;
+  double max_new_point_reprojection_pixels = 3.0;
+
+  // Memory bound: a submap that reaches this many frames is completed regardless of its
+  // keyframe count (keeps per-frame feature storage bounded on a hovering drone).
+  int max_frames_per_submap = 1500;
+
+  BundleAdjustmentOptions bundle_adjustment;
+  OutlierFilterOptions outlier_filter;
+
+  void Check() const;
+
+  // Thresholds for a submap whose first keyframe has `features` features.
+  int EffectiveTauResection(int features) const;
+  int EffectiveTauStereo(int features) const;
+};
+
+}  // namespace glam

@@ -1,0 +1,113 @@
+// Tracking (paper, "Tracking"): landmarks are projected with a predicted pose, those outside
+// the frame or seen from a very different angle than when they were created are dropped, the
+// rest are matched to the frame's features near their projection, and EPnP inside RANSAC gives
+// the pose. The paper predicts with the previous pose; a constant-velocity prediction is used
+// here (same thing for a hovering camera, better for a moving one). When guided matching
+// finds too little (fast motion, a jump), matching against all landmarks is tried once before
+// tracking is declared lost.
+#include <cmath>
+
+#include "engine/features/feature_grid.h"
+#include "engine/features/feature_matcher.h"
+#include "engine/features/guided_matcher.h"
+#include "engine/geometry/absolute_pose.h"
+#include "engine/submap/submap_builder.h"
+
+namespace glam {
+
+std::optional<SE3> SubmapBuilder::PredictPose() const {
+  const FrameRecord* last = nullptr;
+  const FrameRecord* before = nullptr;
+  // The newest frame is the one being tracked; look at the posed ones before it.
+  for (auto it = open_.frames.rbegin() + 1; it != open_.frames.rend(); ++it) {
+    if (!it->cam_from_submap) continue;
+    if (last == nullptr) {
+      last = &*it;
+    } else {
+      before = &*it;
+      break;
+    }
+  }
+  if (last == nullptr) return std::nullopt;
+  if (before == nullptr) return last->cam_from_submap;
+  // cam_last_from_cam_before, applied once more (scaled to the frame gap would need
+  // interpolation on SE3; gaps are equal at a fixed stride).
+  const SE3 motion = *last->cam_from_submap * before->cam_from_submap->Inverse();
+  return motion * *last->cam_from_submap;
+}
+
+bool SubmapBuilder::Track(FrameRecord& record) {
+  if (Localise(record, PredictPose())) return true;
+  return Localise(record, std::nullopt);
+}
+
+bool SubmapBuilder::Localise(FrameRecord& record, const std::optional<SE3>& predicted) const {
+  record.cam_from_submap.reset();
+  record.landmark_matches.clear();
+  if (record.features.size() == 0 || open_.landmarks.empty()) return false;
+  const Camera camera = CurrentCamera();
+  const cv::Mat frame_descriptors = record.features.FloatDescriptors();
+
+  std::vector<int> candidate_landmarks;  // indices into open_.landmarks
+  std::vector<Match> matches;            // query = candidate position, train = feature
+  if (predicted) {
+    const double max_cos = std::cos(options_.max_view_angle_deg * M_PI / 180.0);
+    const Eigen::Vector3d centre = predicted->Inverse().translation();
+    std::vector<Eigen::Vector2d> projections;
+    for (std::size_t i = 0; i < open_.landmarks.size(); ++i) {
+      const Landmark& lm = open_.landmarks[i];
+      Eigen::Vector2d px;
+      if (!camera.Project(*predicted * lm.point_in_submap, &px) || !camera.InImage(px)) continue;
+      const Eigen::Vector3d view = (lm.point_in_submap - centre).normalized();
+      if (view.dot(open_.extras.at(lm.id).first_view_direction) < max_cos) continue;
+      candidate_landmarks.push_back(static_cast<int>(i));
+      projections.push_back(px);
+    }
+    if (static_cast<int>(candidate_landmarks.size()) < options_.min_tracking_inliers) return false;
+    cv::Mat landmark_descriptors(static_cast<int>(candidate_landmarks.size()), kDescriptorSize, CV_32F);
+    for (int r = 0; r < landmark_descriptors.rows; ++r) {
+      DequantizeDescriptor(open_.landmarks[candidate_landmarks[r]].descriptor, landmark_descriptors.ptr<float>(r));
+    }
+    const double diagonal = std::hypot(camera.intrinsics().width, camera.intrinsics().height);
+    GuidedMatchOptions guided;
+    guided.radius_px = options_.match_radius_fraction * diagonal;
+    guided.ratio = static_cast<float>(options_.match_ratio);
+    std::vector<Eigen::Vector2d> points(record.features.points.size());
+    for (std::size_t i = 0; i < points.size(); ++i) points[i] = record.features.points[i].cast<double>();
+    const FeatureGrid grid(points, camera.intrinsics().width, camera.intrinsics().height, guided.radius_px);
+    matches = MatchGuided(landmark_descriptors, projections, frame_descriptors, grid, guided);
+  } else {
+    cv::Mat landmark_descriptors(static_cast<int>(open_.landmarks.size()), kDescriptorSize, CV_32F);
+    for (int r = 0; r < landmark_descriptors.rows; ++r) {
+      candidate_landmarks.push_back(r);
+      DequantizeDescriptor(open_.landmarks[r].descriptor, landmark_descriptors.ptr<float>(r));
+    }
+    MatchOptions global;
+    global.ratio = static_cast<float>(options_.match_ratio);
+    global.mutual = true;
+    matches = MatchDescriptors(landmark_descriptors, frame_descriptors, global);
+  }
+  if (static_cast<int>(matches.size()) < options_.min_tracking_inliers) return false;
+
+  std::vector<Eigen::Vector2d> pixels;
+  std::vector<Eigen::Vector3d> points3d;
+  for (const Match& m : matches) {
+    pixels.push_back(record.features.points[m.train].cast<double>());
+    points3d.push_back(open_.landmarks[candidate_landmarks[m.query]].point_in_submap);
+  }
+  RansacOptions pnp;
+  pnp.inlier_threshold = options_.pnp_threshold_pixels;
+  pnp.min_inliers = options_.min_tracking_inliers;
+  const RansacResult<SE3> result = EstimateAbsolutePose(pixels, points3d, camera, pnp);
+  if (!result.success) return false;
+
+  record.cam_from_submap = result.model;
+  for (std::size_t i = 0; i < matches.size(); ++i) {
+    if (!result.inlier_mask[i]) continue;
+    record.landmark_matches.emplace_back(matches[i].train,
+                                         open_.landmarks[candidate_landmarks[matches[i].query]].id);
+  }
+  return true;
+}
+
+}  // namespace glam

@@ -1,0 +1,53 @@
+#include "engine/video/frame_source.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <opencv2/imgproc.hpp>
+
+#include "engine/core/error.h"
+#include "engine/core/options.h"
+#include "engine/video/image_folder_source.h"
+#include "engine/video/video_file_source.h"
+
+namespace glam {
+
+void FrameSourceOptions::Check() const {
+  if (max_image_size != 0) CheckGreaterEqual("FrameSourceOptions.max_image_size", max_image_size, 16);
+  CheckGreaterEqual("FrameSourceOptions.stride", stride, 1);
+}
+
+cv::Size ProcessingSize(cv::Size original, int max_image_size) {
+  const int long_side = std::max(original.width, original.height);
+  if (max_image_size <= 0 || long_side <= max_image_size) return original;
+  const double scale = static_cast<double>(max_image_size) / long_side;
+  return {std::max(1, static_cast<int>(std::lround(original.width * scale))),
+          std::max(1, static_cast<int>(std::lround(original.height * scale)))};
+}
+
+cv::Mat ToProcessingSize(const cv::Mat& image, cv::Size processing_size) {
+  if (image.size() == processing_size) return image;
+  cv::Mat out;
+  cv::resize(image, out, processing_size, 0, 0, cv::INTER_AREA);
+  return out;
+}
+
+std::unique_ptr<FrameSource> OpenFrameSource(const std::filesystem::path& path,
+                                             const FrameSourceOptions& options) {
+  options.Check();
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) {
+    throw InputError(fmt::format("input '{}' does not exist", path.string()));
+  }
+  if (std::filesystem::is_directory(path, ec)) {
+    return std::make_unique<ImageFolderSource>(path, options);
+  }
+  return std::make_unique<VideoFileSource>(path, options);
+}
+
+FrameSourceInfo ProbeVideo(const std::filesystem::path& path, const FrameSourceOptions& options) {
+  // Opening already decodes the first frame (video) or image (folder).
+  return OpenFrameSource(path, options)->info();
+}
+
+}  // namespace glam

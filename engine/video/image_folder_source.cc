@@ -1,0 +1,135 @@
+#include "engine/video/image_folder_source.h"
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <string_view>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "engine/core/error.h"
+#include "engine/core/logging.h"
+
+namespace glam {
+namespace {
+
+cv::Mat ReadImage(const std::filesystem::path& path) {
+  return cv::imread(path.string(), cv::IMREAD_COLOR);
+}
+
+}  // namespace
+
+bool HasImageExtension(const std::filesystem::path& path) {
+  static constexpr std::array<std::string_view, 10> kExtensions = {
+      ".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".webp", ".ppm", ".pgm", ".jp2"};
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return std::find(kExtensions.begin(), kExtensions.end(), ext) != kExtensions.end();
+}
+
+bool NaturalLess(const std::string& a, const std::string& b) {
+  size_t i = 0, j = 0;
+  while (i < a.size() && j < b.size()) {
+    const bool da = std::isdigit(static_cast<unsigned char>(a[i])) != 0;
+    const bool db = std::isdigit(static_cast<unsigned char>(b[j])) != 0;
+    if (da && db) {
+      size_t ie = i, je = j;
+      while (ie < a.size() && std::isdigit(static_cast<unsigned char>(a[ie]))) ++ie;
+      while (je < b.size() && std::isdigit(static_cast<unsigned char>(b[je]))) ++je;
+      // Compare numerically without overflow: strip leading zeros, then length, then digits.
+      size_t ia = i, jb = j;
+      while (ia + 1 < ie && a[ia] == '0') ++ia;
+      while (jb + 1 < je && b[jb] == '0') ++jb;
+      const std::string_view na(a.data() + ia, ie - ia), nb(b.data() + jb, je - jb);
+      if (na.size() != nb.size()) return na.size() < nb.size();
+      if (na != nb) return na < nb;
+      if (ie - i != je - j) return ie - i < je - j;  // fewer leading zeros first
+      i = ie;
+      j = je;
+    } else {
+      if (a[i] != b[j]) return static_cast<unsigned char>(a[i]) < static_cast<unsigned char>(b[j]);
+      ++i;
+      ++j;
+    }
+  }
+  return a.size() - i < b.size() - j;
+}
+
+ImageFolderSource::ImageFolderSource(const std::filesystem::path& folder,
+                                     const FrameSourceOptions& options)
+    : options_(options) {
+  options_.Check();
+  std::error_code ec;
+  if (!std::filesystem::is_directory(folder, ec)) {
+    throw InputError(fmt::format("image folder '{}' does not exist", folder.string()));
+  }
+  size_t ignored = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(folder, ec)) {
+    if (entry.is_regular_file(ec) && HasImageExtension(entry.path())) {
+      files_.push_back(entry.path());
+    } else {
+      ++ignored;
+    }
+  }
+  if (ec) {
+    throw InputError(fmt::format("cannot list image folder '{}': {}", folder.string(), ec.message()));
+  }
+  if (files_.empty()) {
+    throw InputError(fmt::format("image folder '{}' contains no image files", folder.string()));
+  }
+  if (ignored > 0) {
+    GLAM_LOG_INFO("image folder '{}': ignoring {} entries that are not images", folder.string(),
+                  ignored);
+  }
+  std::sort(files_.begin(), files_.end(), [](const auto& a, const auto& b) {
+    return NaturalLess(a.filename().string(), b.filename().string());
+  });
+
+  const cv::Mat first = ReadImage(files_.front());
+  if (first.empty()) {
+    throw InputError(fmt::format("cannot decode image '{}'", files_.front().string()));
+  }
+  info_.fps = 1.0;
+  info_.frame_count = static_cast<int64_t>(files_.size());
+  info_.original_size = first.size();
+  info_.processing_size = ProcessingSize(info_.original_size, options_.max_image_size);
+  info_.scale = static_cast<double>(info_.processing_size.width) / info_.original_size.width;
+}
+
+std::optional<Frame> ImageFolderSource::Next() {
+  while (next_index_ < static_cast<int64_t>(files_.size())) {
+    const int64_t index = next_index_;
+    next_index_ += options_.stride;
+    const auto& file = files_[static_cast<size_t>(index)];
+    cv::Mat image = ReadImage(file);
+    if (image.empty()) {
+      GLAM_LOG_WARN("skipping image '{}': cannot decode it", file.string());
+      continue;
+    }
+    if (image.size() != info_.original_size) {
+      GLAM_LOG_WARN("skipping image '{}': size {}x{} differs from the first image's {}x{}",
+                    file.string(), image.cols, image.rows, info_.original_size.width,
+                    info_.original_size.height);
+      continue;
+    }
+    Frame frame;
+    frame.index = index;
+    frame.timestamp_s = static_cast<double>(index);
+    frame.original_size = image.size();
+    frame.bgr = ToProcessingSize(image, info_.processing_size);
+    ++delivered_;
+    return frame;
+  }
+  return std::nullopt;
+}
+
+void ImageFolderSource::SeekTo(int64_t index) {
+  if (index < 0 || index >= static_cast<int64_t>(files_.size())) {
+    throw InputError(
+        fmt::format("cannot seek to image {} of a folder with {} images", index, files_.size()));
+  }
+  next_index_ = index;
+}
+
+}  // namespace glam

@@ -1,0 +1,131 @@
+// `glam map INPUT --out DIR [...]`: offline mapping of a video file or image folder. Draws a
+// progress bar on stderr when stderr is a terminal (log lines otherwise, e.g. in CI), and
+// turns Ctrl-C into a cooperative cancel so that threads are joined and no half-written file
+// is left behind by a killed process.
+#include <unistd.h>
+
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include <fmt/format.h>
+
+#include "engine/core/cancellation.h"
+#include "engine/core/error.h"
+#include "engine/core/intrinsics_io.h"
+#include "engine/core/logging.h"
+#include "engine/pipeline/mapping_job.h"
+#include "server/commands.h"
+
+namespace glam::cli {
+namespace {
+
+struct MapArgs {
+  std::string input;
+  std::string out;
+  std::string intrinsics_path;
+  double focal = 0;
+  bool refine_focal = false;
+  MappingOptions options;
+};
+
+CancellationToken& InterruptToken() {
+  static CancellationToken token;
+  return token;
+}
+
+extern "C" void OnInterrupt(int) { InterruptToken().Cancel(); }
+
+std::string FormatDuration(double seconds) {
+  if (seconds < 0) return "--:--";
+  const long s = static_cast<long>(seconds + 0.5);
+  return s >= 3600 ? fmt::format("{}:{:02}:{:02}", s / 3600, (s / 60) % 60, s % 60)
+                   : fmt::format("{:02}:{:02}", s / 60, s % 60);
+}
+
+void DrawProgress(const MappingProgress& p, bool tty) {
+  const std::string counts = p.frames_total > 0 ? fmt::format("{}/{}", p.frames_done, p.frames_total)
+                                                 : fmt::format("{}", p.frames_done);
+  const std::string tail = fmt::format("{} frames  {:.1f} fps  ETA {}  submaps {}  keyframes {}",
+                                       counts, p.fps, FormatDuration(p.eta_s), p.submaps_completed,
+                                       p.keyframes);
+  if (!tty) {
+    GLAM_LOG_INFO("{}: {}", p.stage, tail);
+    return;
+  }
+  constexpr int kWidth = 30;
+  const double fraction =
+      p.frames_total > 0 ? std::min(1.0, static_cast<double>(p.frames_done) / p.frames_total) : 0;
+  const int filled = static_cast<int>(fraction * kWidth);
+  std::cerr << fmt::format("\r\033[K{:<7} [{}{}] {:3.0f}%  {}", p.stage, std::string(filled, '#'),
+                           std::string(kWidth - filled, '.'), 100 * fraction, tail)
+            << std::flush;
+}
+
+void RunMap(MapArgs& args) {
+  if (!args.intrinsics_path.empty()) {
+    args.options.intrinsics = ReadIntrinsicsJson(args.intrinsics_path);
+    // A calibration is trusted: its focal stays fixed unless asked otherwise (on flat nadir
+    // footage focal length trades off against altitude, so refining it costs accuracy).
+    args.options.submap.bundle_adjustment.refine_focal = args.refine_focal;
+  }
+  if (args.focal != 0) args.options.focal_px = args.focal;
+  args.options.Check();
+  if (!std::filesystem::exists(args.input)) {
+    throw InputError(fmt::format("input {} does not exist", args.input));
+  }
+  const bool tty = isatty(STDERR_FILENO) != 0;
+  CancellationToken cancel = InterruptToken();
+  std::signal(SIGINT, OnInterrupt);
+  std::signal(SIGTERM, OnInterrupt);
+  MappingReport report;
+  try {
+    report = RunMapping(args.input, args.out, args.options,
+                        [tty](const MappingProgress& p) { DrawProgress(p, tty); }, cancel);
+  } catch (...) {
+    if (tty) std::cerr << "\n";
+    std::signal(SIGINT, SIG_DFL);
+    std::signal(SIGTERM, SIG_DFL);
+    throw;
+  }
+  std::signal(SIGINT, SIG_DFL);
+  std::signal(SIGTERM, SIG_DFL);
+  if (tty) std::cerr << "\n";
+  std::cerr << fmt::format(
+      "glam map: {} frames, {} posed, {} submaps ({} disconnected), {} keyframes, {} points, "
+      "focal {:.1f} px, {:.1f} fps -> {}\n",
+      report.frames_decoded, report.frames_posed, report.submaps, report.disconnected_submaps,
+      report.keyframes, report.points, report.focal_original, report.processing_fps, args.out);
+}
+
+}  // namespace
+
+void RegisterMapCommand(CLI::App& app) {
+  auto args = std::make_shared<MapArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "map", "Build submaps, trajectory.tum, points.ply and report.json from a video or image folder");
+  cmd->add_option("input", args->input, "Video file (MP4/MOV/MKV) or folder of images")->required();
+  cmd->add_option("--out", args->out, "Output directory")->required();
+  cmd->add_option("--intrinsics", args->intrinsics_path,
+                  "intrinsics.json at the input's original resolution");
+  cmd->add_option("--focal", args->focal,
+                  "Focal length in pixels at original resolution (default: 0.8 x long side, refined)");
+  cmd->add_flag("--refine-focal", args->refine_focal,
+               "Refine the focal length of --intrinsics too (always refined without them)");
+  cmd->add_option("--max-image-size", args->options.source.max_image_size,
+                  "Downscale frames to this long side (px); 0 = never")
+      ->capture_default_str();
+  cmd->add_option("--stride", args->options.source.stride, "Use every N-th frame")->capture_default_str();
+  cmd->add_option("--keyframes-per-submap", args->options.submap.keyframes_per_submap,
+                  "Keyframes at which a submap is completed")
+      ->capture_default_str();
+  cmd->add_option("--max-features", args->options.sift.max_features, "SIFT features per frame")
+      ->capture_default_str();
+  cmd->callback([args] { RunMap(*args); });
+}
+
+}  // namespace glam::cli

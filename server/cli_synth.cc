@@ -1,0 +1,40 @@
+// `glam synth`: render a synthetic aerial video with exact ground truth (tools/synth).
+#include <string>
+
+#include "server/commands.h"
+#include "tools/synth/synth.h"
+
+namespace glam::cli {
+
+void RegisterSynthCommand(CLI::App& app) {
+  auto options = std::make_shared<synth::SynthOptions>();
+  auto trajectory = std::make_shared<std::string>("lawnmower");
+  CLI::App* cmd = app.add_subcommand(
+      "synth", "Render a synthetic aerial video with ground truth (trajectory, surface, intrinsics)");
+  cmd->add_option("--out", options->out, "Output directory")->required();
+  cmd->add_option("--trajectory", *trajectory, "lawnmower | loop | orbit")->capture_default_str();
+  cmd->add_option("--altitude", options->altitude, "Flight height above ground (m)")->capture_default_str();
+  cmd->add_option("--pitch-deg", options->pitch_deg, "Camera tilt from nadir (deg), 0..80")->capture_default_str();
+  cmd->add_option("--speed", options->speed, "Ground speed (m/s)")->capture_default_str();
+  cmd->add_option("--wobble-deg", options->wobble_deg, "Attitude wobble amplitude (deg)")->capture_default_str();
+  cmd->add_option("--fps", options->fps, "Frame rate")->capture_default_str();
+  cmd->add_option("--frames", options->frames, "Number of frames")->capture_default_str();
+  cmd->add_option("--width", options->width, "Image width (px, even)")->capture_default_str();
+  cmd->add_option("--height", options->height, "Image height (px, even)")->capture_default_str();
+  cmd->add_option("--focal", options->focal, "Focal length (px); 0 = 60 deg horizontal FOV")->capture_default_str();
+  cmd->add_option("--k1", options->k1, "Radial distortion k1")->capture_default_str();
+  cmd->add_option("--k2", options->k2, "Radial distortion k2")->capture_default_str();
+  cmd->add_option("--seed", options->seed, "World and flight seed")->capture_default_str();
+  cmd->add_option("--relief", options->relief, "Terrain relief amplitude (m)")->capture_default_str();
+  cmd->add_option("--cell-size", options->cell_size, "Ground-truth heightfield cell (m)")->capture_default_str();
+  cmd->add_option("--building-density", options->building_density, "0 = none, 1 = village")->capture_default_str();
+  cmd->add_option("--crf", options->crf, "H.264 CRF (quality, lower is better)")->capture_default_str();
+  cmd->add_flag("--frames-dir", options->write_frames, "Also write frames/NNNNNN.png");
+  cmd->add_flag("--force", options->force, "Re-render even if the output is up to date");
+  cmd->callback([options, trajectory] {
+    options->trajectory = synth::ParseTrajectoryKind(*trajectory);
+    synth::RunSynth(*options);
+  });
+}
+
+}  // namespace glam::cli

@@ -1,0 +1,57 @@
+// `glam`: the single executable of GLAM server. Subcommands:
+//   synth   render a synthetic aerial video with ground truth
+//   eval    evaluate a trajectory / point cloud against ground truth
+//   map     build submaps, trajectory and point cloud from a video or image folder
+// (serve and vocab arrive with their engine parts.)
+#include <cstdlib>
+#include <exception>
+#include <iostream>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "engine/core/error.h"
+#include "engine/core/logging.h"
+#include "server/commands.h"
+
+namespace {
+
+constexpr int kExitInputError = 2;
+constexpr int kExitEnvironmentError = 3;
+
+std::string DefaultLogLevel() {
+  const char* env = std::getenv("GLAM_LOG_LEVEL");
+  return env != nullptr ? env : "info";
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"GLAM server: Global-Local Airborne Mapping from drone video"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "glam 0.1.0");
+  std::string log_level = DefaultLogLevel();
+  app.add_option("--log-level", log_level,
+                 "trace, debug, info, warn, error, critical or off (env GLAM_LOG_LEVEL)")
+      ->capture_default_str();
+  app.parse_complete_callback([&] { glam::InitLogging(log_level); });
+  glam::cli::RegisterEvalCommand(app);
+  glam::cli::RegisterSynthCommand(app);
+  glam::cli::RegisterMapCommand(app);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const glam::InputError& e) {
+    std::cerr << "glam: error: " << e.what() << "\n";
+    return kExitInputError;
+  } catch (const glam::Cancelled&) {
+    std::cerr << "glam: cancelled\n";
+    return kExitEnvironmentError;
+  } catch (const std::exception& e) {
+    std::cerr << "glam: failed: " << e.what() << "\n";
+    return kExitEnvironmentError;
+  }
+  return EXIT_SUCCESS;
+}

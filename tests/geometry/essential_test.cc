@@ -1,0 +1,110 @@
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "engine/geometry/essential.h"
+#include "engine/geometry/triangulation.h"
+#include "tests/geometry/synthetic_scene.h"
+
+namespace glam {
+namespace {
+
+using testing::AngleBetweenDeg;
+using testing::RotationErrorDeg;
+
+constexpr double kFocal = 800.0;
+
+struct TwoViews {
+  SE3 cam1_from_world, cam2_from_world;
+  SE3 cam2_from_cam1;
+  std::vector<TwoViewCorrespondence> data;
+  std::vector<bool> is_outlier;
+};
+
+TwoViews MakeViews(const Eigen::Vector3d& c2, double yaw2, int n, double outlier_ratio,
+                   double noise_px, uint32_t seed) {
+  std::mt19937 rng(seed);
+  TwoViews v;
+  v.cam1_from_world = testing::DownwardCamera({0, 0, 30}, 10.0, 10.0);
+  v.cam2_from_world = testing::DownwardCamera(c2, yaw2, 14.0);
+  v.cam2_from_cam1 = v.cam2_from_world * v.cam1_from_world.Inverse();
+  std::normal_distribution<double> gauss(0.0, noise_px / kFocal);
+  std::uniform_real_distribution<double> coin(0, 1), u(-0.7, 0.7);
+  for (const auto& p : testing::PointsInView(v.cam1_from_world, n, 20.0, 45.0, 0.7, rng)) {
+    if ((v.cam2_from_world * p).z() < 1.0) continue;
+    TwoViewCorrespondence c{testing::Observe(v.cam1_from_world, p) + Eigen::Vector2d(gauss(rng), gauss(rng)),
+                            testing::Observe(v.cam2_from_world, p) + Eigen::Vector2d(gauss(rng), gauss(rng))};
+    const bool outlier = coin(rng) < outlier_ratio;
+    if (outlier) c.x2 = Eigen::Vector2d(u(rng), u(rng));
+    v.data.push_back(c);
+    v.is_outlier.push_back(outlier);
+  }
+  return v;
+}
+
+TEST(Essential, NoiselessMinimalSampleContainsTruth) {
+  const TwoViews v = MakeViews({4, 1, 31}, 20.0, 5, 0.0, 0.0, 1);
+  ASSERT_EQ(v.data.size(), 5u);
+  const auto models = EssentialEstimator(kFocal).Fit(v.data);
+  ASSERT_FALSE(models.empty());
+  // The true E = [t]x R, up to scale and sign, must be among the solutions.
+  const Eigen::Vector3d t = v.cam2_from_cam1.translation().normalized();
+  Eigen::Matrix3d truth = Hat(t) * v.cam2_from_cam1.rotation().matrix();
+  truth /= truth.norm();
+  double best = 1e9;
+  for (Eigen::Matrix3d E : models) {
+    E /= E.norm();
+    best = std::min({best, (E - truth).norm(), (E + truth).norm()});
+  }
+  EXPECT_LT(best, 1e-6);
+}
+
+TEST(Essential, RansacAndCheiralityRecoverRelativePose) {
+  const TwoViews v = MakeViews({5, 2, 31}, 25.0, 800, 0.35, 0.5, 2);
+  RansacOptions options;
+  options.inlier_threshold = 1.5;  // pixels (Sampson)
+  const RelativePoseResult r = EstimateRelativePose(v.data, kFocal, options);
+  ASSERT_TRUE(r.success);
+  EXPECT_LT(RotationErrorDeg(r.cam2_from_cam1.rotation(), v.cam2_from_cam1.rotation()), 0.1);
+  EXPECT_NEAR(r.cam2_from_cam1.translation().norm(), 1.0, 1e-9);
+  EXPECT_LT(AngleBetweenDeg(r.cam2_from_cam1.translation(), v.cam2_from_cam1.translation()), 1.0);
+  int missed = 0, accepted_outliers = 0;
+  const EssentialEstimator estimator(kFocal);
+  Eigen::Matrix3d true_E = Hat(v.cam2_from_cam1.translation()) * v.cam2_from_cam1.rotation().matrix();
+  for (size_t i = 0; i < v.data.size(); ++i) {
+    if (!v.is_outlier[i]) missed += r.inlier_mask[i] ? 0 : 1;
+    if (estimator.Residual(true_E, v.data[i]) > 3.0) accepted_outliers += r.inlier_mask[i] ? 1 : 0;
+  }
+  EXPECT_LE(missed, static_cast<int>(v.data.size()) / 100);
+  EXPECT_EQ(accepted_outliers, 0);
+}
+
+TEST(Essential, ForwardMotionAndSignOfTranslation) {
+  // Camera 2 moves along the optical axis of camera 1 (towards the ground) and rotates.
+  const TwoViews v = MakeViews({0.5, 0.3, 26}, 15.0, 400, 0.0, 0.3, 3);
+  RansacOptions options;
+  options.inlier_threshold = 1.0;
+  const RelativePoseResult r = EstimateRelativePose(v.data, kFocal, options);
+  ASSERT_TRUE(r.success);
+  EXPECT_LT(RotationErrorDeg(r.cam2_from_cam1.rotation(), v.cam2_from_cam1.rotation()), 0.2);
+  EXPECT_LT(AngleBetweenDeg(r.cam2_from_cam1.translation(), v.cam2_from_cam1.translation()), 2.0);
+}
+
+TEST(Essential, RecoverPoseChoosesDecompositionInFront) {
+  const TwoViews v = MakeViews({3, -2, 29}, -10.0, 200, 0.0, 0.0, 4);
+  Eigen::Matrix3d E = Hat(v.cam2_from_cam1.translation()) * v.cam2_from_cam1.rotation().matrix();
+  for (double sign : {1.0, -1.0}) {  // E and -E describe the same geometry
+    const RelativePose pose = RecoverRelativePose(sign * E, v.data, std::vector<uint8_t>(v.data.size(), 1));
+    EXPECT_EQ(pose.num_inliers, static_cast<int>(v.data.size()));
+    EXPECT_LT(RotationErrorDeg(pose.cam2_from_cam1.rotation(), v.cam2_from_cam1.rotation()), 1e-6);
+    EXPECT_LT(AngleBetweenDeg(pose.cam2_from_cam1.translation(), v.cam2_from_cam1.translation()), 1e-6);
+  }
+}
+
+TEST(Essential, TooFewCorrespondencesFail) {
+  const TwoViews v = MakeViews({4, 1, 31}, 20.0, 4, 0.0, 0.0, 5);
+  EXPECT_FALSE(EstimateRelativePose(v.data, kFocal, RansacOptions{}).success);
+}
+
+}  // namespace
+}  // namespace glam

@@ -1,0 +1,147 @@
+// Chaining must recover the similarity between two submaps from their shared landmarks, even
+// with a large fraction of wrong descriptor matches (repeated texture in aerial footage).
+#include "engine/pipeline/submap_chainer.h"
+
+#include <random>
+
+#include <gtest/gtest.h>
+
+namespace glam {
+namespace {
+
+Descriptor RandomDescriptor(std::mt19937& rng) {
+  std::uniform_int_distribution<int> byte(0, 255);
+  Descriptor d;
+  for (auto& v : d) v = static_cast<std::uint8_t>(byte(rng));
+  return d;
+}
+
+Descriptor Perturb(Descriptor d, std::mt19937& rng) {
+  std::uniform_int_distribution<int> delta(-6, 6);
+  for (auto& v : d) v = static_cast<std::uint8_t>(std::clamp(v + delta(rng), 0, 255));
+  return d;
+}
+
+Keyframe KeyframeAbove(const Eigen::Vector3d& centre) {
+  Keyframe kf;
+  // Camera looking straight down (z forward = -z world): rotation by pi about x.
+  const SO3 cam_from_submap_rot = SO3::Exp(Eigen::Vector3d(M_PI, 0, 0));
+  kf.cam_from_submap = SE3(cam_from_submap_rot, -(cam_from_submap_rot * centre));
+  return kf;
+}
+
+struct SyntheticPair {
+  Submap previous;
+  Submap next;
+  Sim3 prev_from_new;
+};
+
+// Ground points at z in [-2, 2] under cameras at height 100 (previous submap units); the
+// next submap sees the last part of the same ground in its own frame (prev_from_new^-1).
+SyntheticPair MakePair(double wrong_fraction, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::normal_distribution<double> noise(0.0, 0.1);  // 0.1 % of the height
+  SyntheticPair pair;
+  pair.prev_from_new = Sim3(2.5, SO3::Exp(Eigen::Vector3d(0.2, -0.3, 1.1)), Eigen::Vector3d(40, -7, 3));
+  const Sim3 new_from_prev = pair.prev_from_new.Inverse();
+  pair.previous.id = 0;
+  pair.next.id = 1;
+  for (int i = 0; i < 5; ++i) pair.previous.keyframes.push_back(KeyframeAbove({i * 20.0, 0, 100}));
+  for (int i = 0; i < 5; ++i) {
+    pair.next.keyframes.push_back(KeyframeAbove({0, 0, 0}));
+    pair.next.keyframes.back().cam_from_submap =
+        SE3(pair.next.keyframes.back().cam_from_submap.rotation(), Eigen::Vector3d::Zero());
+  }
+  const int own = 300, shared = 200;
+  for (int i = 0; i < own + shared; ++i) {
+    Landmark lm;
+    lm.id = static_cast<std::uint32_t>(i);
+    lm.point_in_submap = {u(rng) * 120 - 20, u(rng) * 100 - 50, u(rng) * 4 - 2};
+    lm.descriptor = RandomDescriptor(rng);
+    pair.previous.landmarks.push_back(lm);
+  }
+  // Shared landmarks: the previous submap's last 200, seen again with noise in the new frame.
+  std::vector<Eigen::Vector3d> shared_points;
+  for (int i = own; i < own + shared; ++i) shared_points.push_back(pair.previous.landmarks[i].point_in_submap);
+  // Wrong matches: the first wrong_fraction of them get another shared point's position.
+  const int wrong = static_cast<int>(wrong_fraction * shared);
+  std::shuffle(shared_points.begin(), shared_points.begin() + wrong, rng);
+  for (int k = 0; k < shared; ++k) {
+    const Landmark& source = pair.previous.landmarks[static_cast<std::size_t>(own + k)];
+    Landmark lm;
+    lm.id = static_cast<std::uint32_t>(k);
+    const Eigen::Vector3d noisy = shared_points[static_cast<std::size_t>(k)] +
+                                  Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+    lm.point_in_submap = new_from_prev * noisy;
+    lm.descriptor = Perturb(source.descriptor, rng);
+    pair.next.landmarks.push_back(lm);
+  }
+  for (int k = 0; k < 150; ++k) {  // the next submap's own new ground
+    Landmark lm;
+    lm.id = static_cast<std::uint32_t>(shared + k);
+    lm.point_in_submap = new_from_prev * Eigen::Vector3d(100 + u(rng) * 80, u(rng) * 100 - 50, 0);
+    lm.descriptor = RandomDescriptor(rng);
+    pair.next.landmarks.push_back(lm);
+  }
+  // Keyframes of the next submap above its part of the ground (for its scale; not needed for
+  // linking, which uses the previous submap's scale).
+  for (int i = 0; i < 5; ++i) {
+    const Eigen::Vector3d centre_prev(100 + i * 20.0, 0, 100);
+    pair.next.keyframes[static_cast<std::size_t>(i)] = KeyframeAbove(new_from_prev * centre_prev);
+  }
+  return pair;
+}
+
+TEST(SubmapChainer, SubmapScaleIsTheFlyingHeight) {
+  const SyntheticPair pair = MakePair(0.0, 3);
+  // Ground spreads 50 units sideways of the flight line: nearest-camera distances are
+  // sqrt(100^2 + d^2) with a median a little above the height.
+  EXPECT_GE(SubmapScale(pair.previous), 100.0);
+  EXPECT_LE(SubmapScale(pair.previous), 115.0);
+}
+
+TEST(SubmapChainer, RecoversKnownSim3With30PercentWrongMatches) {
+  for (unsigned seed : {1u, 2u, 3u}) {
+    const SyntheticPair pair = MakePair(0.3, seed);
+    const ChainResult result = LinkSubmaps(pair.previous, pair.next);
+    ASSERT_TRUE(result.linked) << "seed " << seed;
+    EXPECT_GE(result.matches, 190);
+    // 140 correct matches; a wrong one may land within the threshold by chance.
+    EXPECT_GE(result.inliers, 130);
+    EXPECT_LE(result.inliers, 150);
+    const Sim3& est = result.prev_from_new;
+    EXPECT_NEAR(est.scale() / pair.prev_from_new.scale(), 1.0, 2e-3);
+    const double angle = (est.rotation() * pair.prev_from_new.rotation().Inverse()).Log().norm();
+    EXPECT_LT(angle, 2e-3);
+    // Compare where both put a point of the next submap's ground.
+    const Eigen::Vector3d probe = pair.prev_from_new.Inverse() * Eigen::Vector3d(60, 10, 0);
+    EXPECT_LT((est * probe - pair.prev_from_new * probe).norm(), 0.1);
+  }
+}
+
+TEST(SubmapChainer, UnrelatedSubmapsAreNotLinked) {
+  SyntheticPair pair = MakePair(0.0, 5);
+  std::mt19937 rng(11);
+  for (Landmark& lm : pair.next.landmarks) lm.descriptor = RandomDescriptor(rng);
+  const ChainResult result = LinkSubmaps(pair.previous, pair.next);
+  EXPECT_FALSE(result.linked);
+}
+
+TEST(SubmapChainer, RansacRejectsOutliersAndFitsExactly) {
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<double> u(-10, 10);
+  const Sim3 truth(0.5, SO3::Exp(Eigen::Vector3d(0.1, 0.2, 0.3)), Eigen::Vector3d(1, 2, 3));
+  std::vector<Eigen::Vector3d> source, target;
+  for (int i = 0; i < 100; ++i) {
+    source.emplace_back(u(rng), u(rng), u(rng));
+    target.push_back(i < 60 ? truth * source.back() : Eigen::Vector3d(u(rng), u(rng), u(rng)));
+  }
+  const Sim3RansacResult r = EstimateSim3Ransac(source, target, 0.01, ChainingOptions{});
+  ASSERT_TRUE(r.success);
+  EXPECT_EQ(r.inliers.size(), 60u);
+  EXPECT_LT((r.target_from_source.matrix() - truth.matrix()).norm(), 1e-9);
+}
+
+}  // namespace
+}  // namespace glam

@@ -1,0 +1,169 @@
+// End-to-end accuracy of thread 1 on the project's synthetic lawnmower clip (300 frames,
+// 640x360, 100 m altitude; rendered once per ctest run by the fixture synth_lawnmower_small).
+// Bounds from the local-submap issue: >= 3 submaps with 6 keyframes each, >= 98 % of frames
+// posed, per-submap ATE after Sim3 < 0.2 % of altitude, map median error < 0.3 % of altitude,
+// and >= 60 % of the flown-over ground covered by points (so emitting few points cannot pass).
+#include <map>
+#include <set>
+
+#include <gtest/gtest.h>
+
+#include "engine/core/intrinsics_io.h"
+#include "engine/core/logging.h"
+#include "engine/core/similarity_alignment.h"
+#include "engine/export/tum_trajectory.h"
+#include "engine/features/sift_extractor.h"
+#include "engine/features/feature_matcher.h"
+#include "engine/geometry/triangulation.h"
+#include "engine/submap/submap_builder.h"
+#include "engine/video/frame_source.h"
+#include "tools/eval/ground_truth_surface.h"
+
+namespace glam {
+namespace {
+
+constexpr double kAltitude = 100.0;
+
+class SubmapBuilderOnSyntheticClip : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    if (const char* level = std::getenv("GLAM_LOG_LEVEL")) InitLogging(level);
+    const std::filesystem::path dir = std::filesystem::path(GLAM_TEST_FIXTURES_DIR) / "lawnmower_small";
+    intrinsics_ = new Intrinsics(ReadIntrinsicsJson(dir / "intrinsics.json"));
+    gt_ = new std::vector<TimedPose>(ReadTumTrajectory(dir / "gt_trajectory.tum"));
+    surface_ = new eval::HeightfieldSurface(eval::HeightfieldSurface::Load(dir / "gt_surface.json"));
+
+    SubmapOptions options;
+    options.keyframes_per_submap = 6;
+    // Calibrated intrinsics are given (as `glam map --intrinsics` does): focal stays fixed.
+    options.bundle_adjustment.refine_focal = false;
+    SubmapBuilder builder(*intrinsics_, options);
+    SiftExtractor sift;
+    auto source = OpenFrameSource(dir / "video.mp4");
+    submaps_ = new std::vector<Submap>();
+    while (auto frame = source->Next()) {
+      for (Submap& s : builder.AddFrame(frame->index, frame->timestamp_s, sift.Extract(frame->bgr))) {
+        submaps_->push_back(std::move(s));
+      }
+    }
+    for (Submap& s : builder.Finish()) submaps_->push_back(std::move(s));
+    frames_ = source->frames_delivered();
+    focal_ = builder.focal();
+  }
+  static void TearDownTestSuite() {
+    delete intrinsics_;
+    delete gt_;
+    delete surface_;
+    delete submaps_;
+  }
+
+  // Sim3 gt_world_from_submap fitted on the submap's camera centres (rmse = ATE). A strip of
+  // a lawnmower flight is nearly a line, which leaves the rotation about it free, so for the
+  // map the fit also uses a point one altitude ahead of each camera along its optical axis.
+  static Sim3 AlignToGroundTruth(const Submap& s, double* rmse, bool use_orientation = false) {
+    std::vector<Eigen::Vector3d> est, truth;
+    for (const FramePose& fp : s.frame_poses) {
+      est.push_back(fp.cam_from_submap.Inverse().translation());
+      truth.push_back((*gt_)[static_cast<std::size_t>(fp.frame_index)].world_from_cam.translation());
+    }
+    const auto aligned = AlignSimilarity(est, truth);
+    *rmse = aligned.rmse;
+    if (!use_orientation) return aligned.target_from_source;
+    const double ahead = kAltitude / aligned.target_from_source.scale();
+    for (const FramePose& fp : s.frame_poses) {
+      const SE3 submap_from_cam = fp.cam_from_submap.Inverse();
+      est.push_back(submap_from_cam * Eigen::Vector3d(0, 0, ahead));
+      truth.push_back((*gt_)[static_cast<std::size_t>(fp.frame_index)].world_from_cam * Eigen::Vector3d(0, 0, kAltitude));
+    }
+    return AlignSimilarity(est, truth).target_from_source;
+  }
+
+  static Intrinsics* intrinsics_;
+  static std::vector<TimedPose>* gt_;
+  static eval::HeightfieldSurface* surface_;
+  static std::vector<Submap>* submaps_;
+  static std::int64_t frames_;
+  static double focal_;
+};
+
+Intrinsics* SubmapBuilderOnSyntheticClip::intrinsics_ = nullptr;
+std::vector<TimedPose>* SubmapBuilderOnSyntheticClip::gt_ = nullptr;
+eval::HeightfieldSurface* SubmapBuilderOnSyntheticClip::surface_ = nullptr;
+std::vector<Submap>* SubmapBuilderOnSyntheticClip::submaps_ = nullptr;
+std::int64_t SubmapBuilderOnSyntheticClip::frames_ = 0;
+double SubmapBuilderOnSyntheticClip::focal_ = 0;
+
+TEST_F(SubmapBuilderOnSyntheticClip, BuildsSeveralSubmapsAndPosesAlmostEveryFrame) {
+  ASSERT_EQ(frames_, static_cast<std::int64_t>(gt_->size()));
+  EXPECT_GE(submaps_->size(), 3u);
+  std::set<std::int64_t> posed;
+  for (const Submap& s : *submaps_) {
+    EXPECT_GE(s.keyframes.size(), 3u);
+    for (const FramePose& fp : s.frame_poses) posed.insert(fp.frame_index);
+  }
+  EXPECT_GE(static_cast<double>(posed.size()) / static_cast<double>(frames_), 0.98);
+  // Consecutive submaps share their overlap frames.
+  for (std::size_t i = 1; i < submaps_->size(); ++i) {
+    EXPECT_LE((*submaps_)[i].first_frame, (*submaps_)[i - 1].last_frame) << "submap " << i;
+  }
+}
+
+TEST_F(SubmapBuilderOnSyntheticClip, PerSubmapTrajectoryIsAccurate) {
+  ASSERT_FALSE(submaps_->empty());
+  for (const Submap& s : *submaps_) {
+    double rmse = 0;
+    AlignToGroundTruth(s, &rmse);
+    EXPECT_LT(rmse, 0.002 * kAltitude) << "submap " << s.id << " with " << s.frame_poses.size() << " frames";
+  }
+}
+
+TEST_F(SubmapBuilderOnSyntheticClip, MapIsOnTheTrueSurfaceAndCoversTheGround) {
+  ASSERT_FALSE(submaps_->empty());
+  std::vector<double> errors;
+  constexpr double kCell = 10.0;
+  std::set<std::pair<int, int>> covered;
+  for (const Submap& s : *submaps_) {
+    double rmse = 0;
+    const Sim3 gt_from_submap = AlignToGroundTruth(s, &rmse, /*use_orientation=*/true);
+    for (const Landmark& lm : s.landmarks) {
+      const Eigen::Vector3d p = gt_from_submap * lm.point_in_submap;
+      const auto d = surface_->Distance(p);
+      errors.push_back(d.inside ? d.distance : 1e9);
+      if (std::getenv("GLAM_DEBUG_MAP") && lm.id % 50 == 0) {
+        std::printf("submap %u dz %.3f dist %.3f at %.1f %.1f %.1f\n", s.id, p.z() - surface_->HeightAt(p.x(), p.y()), d.distance, p.x(), p.y(), p.z());
+      }
+      covered.insert({static_cast<int>(std::floor(p.x() / kCell)), static_cast<int>(std::floor(p.y() / kCell))});
+    }
+  }
+  ASSERT_GE(errors.size(), 3000u);  // a minimum point count
+  std::nth_element(errors.begin(), errors.begin() + static_cast<std::ptrdiff_t>(errors.size() / 2), errors.end());
+  EXPECT_LT(errors[errors.size() / 2], 0.003 * kAltitude);
+
+  // Flown-over ground: 10 m cells whose centre (on the true surface) is seen by some frame.
+  const Camera camera(*intrinsics_);
+  std::set<std::pair<int, int>> seen;
+  for (std::size_t f = 0; f < gt_->size(); f += 5) {
+    const SE3 cam_from_world = (*gt_)[f].world_from_cam.Inverse();
+    const Eigen::Vector3d c = (*gt_)[f].world_from_cam.translation();
+    for (int i = static_cast<int>((c.x() - 300) / kCell); i <= static_cast<int>((c.x() + 300) / kCell); ++i) {
+      for (int j = static_cast<int>((c.y() - 300) / kCell); j <= static_cast<int>((c.y() + 300) / kCell); ++j) {
+        const double x = (i + 0.5) * kCell, y = (j + 0.5) * kCell;
+        if (!surface_->Contains(x, y)) continue;
+        Eigen::Vector2d px;
+        if (camera.Project(cam_from_world * Eigen::Vector3d(x, y, surface_->HeightAt(x, y)), &px) &&
+            camera.InImage(px)) {
+          seen.insert({i, j});
+        }
+      }
+    }
+  }
+  ASSERT_FALSE(seen.empty());
+  std::size_t hit = 0;
+  for (const auto& cell : seen) hit += covered.count(cell);
+  std::printf("map: %zu points, median error %.3f m, coverage %.1f %% of %zu cells\n", errors.size(),
+              errors[errors.size() / 2], 100.0 * hit / seen.size(), seen.size());
+  EXPECT_GE(static_cast<double>(hit) / static_cast<double>(seen.size()), 0.6);
+}
+
+}  // namespace
+}  // namespace glam

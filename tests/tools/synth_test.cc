@@ -1,0 +1,320 @@
+// Tests of the synthetic renderer: its ground truth must be exact (projections of true
+// surface points with true poses land on the same texture), its flights smooth, its files
+// complete and parseable, and everything deterministic from the seed.
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <numeric>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
+
+#include "engine/core/camera.h"
+#include "engine/core/error.h"
+#include "engine/core/intrinsics_io.h"
+#include "tools/synth/ground_truth_writer.h"
+#include "tools/synth/renderer.h"
+#include "tools/synth/synth.h"
+#include "tools/synth/trajectory.h"
+#include "tools/synth/world.h"
+
+namespace glam::synth {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Small, fast settings: low altitude keeps the world (and its texture) small.
+SynthOptions SmallOptions() {
+  SynthOptions o;
+  o.width = 320;
+  o.height = 180;
+  o.frames = 40;
+  o.altitude = 50;
+  o.speed = 8;
+  o.seed = 3;
+  return o;
+}
+
+TerrainFn Terrain(const SynthOptions& o) {
+  return [o](double x, double y) { return TerrainHeight(x, y, o); };
+}
+
+double Ncc(const cv::Mat& a, const cv::Mat& b) {
+  cv::Mat r;
+  cv::matchTemplate(a, b, r, cv::TM_CCOEFF_NORMED);
+  return r.at<float>(0, 0);
+}
+
+double Median(std::vector<double> v) {
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+// Surface points seen at grid pixels of frame `a`, re-projected into frame `b` with
+// `pose_b`; returns the patch NCC of every point visible (unoccluded) in b.
+std::vector<double> PatchNccs(const World& world, const Camera& camera, const cv::Mat& img_a,
+                              const SE3& pose_a, const cv::Mat& img_b, const SE3& pose_b_true,
+                              const SE3& pose_b) {
+  cv::Mat ga, gb;
+  cv::cvtColor(img_a, ga, cv::COLOR_BGR2GRAY);
+  cv::cvtColor(img_b, gb, cv::COLOR_BGR2GRAY);
+  ga.convertTo(ga, CV_32F);
+  gb.convertTo(gb, CV_32F);
+  const cv::Size patch(15, 15);
+  std::vector<double> nccs;
+  for (int y = 20; y < img_a.rows - 20; y += 12) {
+    for (int x = 20; x < img_a.cols - 20; x += 12) {
+      const Eigen::Vector3d dir = pose_a.rotation() * camera.Unproject(Eigen::Vector2d(x, y)).normalized();
+      RayHit hit;
+      if (!world.surface().Intersect(pose_a.translation(), dir, 1e4, &hit)) continue;
+      // Visible from b (true pose): the ray from b's centre must reach this point first.
+      const Eigen::Vector3d to_point = hit.point - pose_b_true.translation();
+      RayHit hit_b;
+      if (!world.surface().Intersect(pose_b_true.translation(), to_point.normalized(), 1e4, &hit_b) ||
+          std::abs(hit_b.t - to_point.norm()) > 0.05) {
+        continue;
+      }
+      Eigen::Vector2d pb;
+      if (!camera.Project(pose_b.Inverse() * hit.point, &pb) || !camera.InImage(pb, 12)) continue;
+      cv::Mat pa_img, pb_img;
+      cv::getRectSubPix(ga, patch, cv::Point2f(x, y), pa_img);
+      cv::getRectSubPix(gb, patch, cv::Point2f(static_cast<float>(pb.x()), static_cast<float>(pb.y())), pb_img);
+      cv::Scalar mean, stddev;
+      cv::meanStdDev(pa_img, mean, stddev);
+      if (stddev[0] < 2.0) continue;  // featureless patch: NCC is meaningless
+      nccs.push_back(Ncc(pa_img, pb_img));
+    }
+  }
+  return nccs;
+}
+
+TEST(SynthRender, TrueSurfacePointsReprojectOntoTheSameTexture) {
+  SynthOptions o = SmallOptions();
+  o.k1 = -0.08;  // distortion must be consistent between rendering and Camera::Project
+  o.k2 = 0.01;
+  o.pitch_deg = 20;
+  o.frames = 21;
+  const std::vector<SE3> poses = MakeTrajectory(o, Terrain(o));
+  const World world = World::Generate(o, poses);
+  const Camera camera(MakeIntrinsics(o));
+  const Renderer renderer(world, camera.intrinsics());
+  const cv::Mat a = renderer.Render(poses[5]);
+  const cv::Mat b = renderer.Render(poses[15]);
+  ASSERT_EQ(a.size(), cv::Size(o.width, o.height));
+
+  const std::vector<double> good = PatchNccs(world, camera, a, poses[5], b, poses[15], poses[15]);
+  ASSERT_GT(good.size(), 50u);
+  EXPECT_GT(Median(good), 0.9);
+
+  // A pose 3 m off (about 10 px at this altitude) must not match the texture.
+  SE3 wrong = poses[15];
+  wrong.translation() += Eigen::Vector3d(3.0, -2.0, 0.0);
+  const std::vector<double> bad = PatchNccs(world, camera, a, poses[5], b, poses[15], wrong);
+  ASSERT_GT(bad.size(), 50u);
+  EXPECT_LT(Median(bad), 0.5);
+}
+
+TEST(SynthRender, RayHitsLieOnTheHeightfieldAndAreTheFirstCrossing) {
+  SynthOptions o = SmallOptions();
+  o.frames = 2;
+  o.pitch_deg = 45;
+  o.building_density = 2.0;
+  const std::vector<SE3> poses = MakeTrajectory(o, Terrain(o));
+  const World world = World::Generate(o, poses);
+  const Camera camera(MakeIntrinsics(o));
+  const Heightfield& hf = world.surface();
+  int hits = 0;
+  for (int y = 0; y < o.height; y += 9) {
+    for (int x = 0; x < o.width; x += 9) {
+      const Eigen::Vector3d c = poses[0].translation();
+      const Eigen::Vector3d dir = poses[0].rotation() * camera.Unproject(Eigen::Vector2d(x, y)).normalized();
+      RayHit hit;
+      if (!hf.Intersect(c, dir, 1e4, &hit)) continue;
+      ++hits;
+      ASSERT_NEAR(hit.point.z(), hf.HeightAt(hit.point.x(), hit.point.y()), 1e-5);
+      // No earlier crossing: march the ray densely up to the hit.
+      for (double t = 0; t < hit.t - 0.02; t += 0.02) {
+        const Eigen::Vector3d p = c + t * dir;
+        ASSERT_GT(p.z(), hf.HeightAt(p.x(), p.y()) - 1e-6) << "ray crossed the surface before t=" << hit.t;
+      }
+    }
+  }
+  EXPECT_GT(hits, 500);
+}
+
+struct Motion {
+  double max_accel = 0;        // m/s^2
+  double max_accel_jump = 0;   // m/s^2 between consecutive frames
+  double max_ang_accel = 0;    // rad/s^2
+  double max_speed_error = 0;  // relative
+  double max_altitude_error = 0;
+  double total_yaw_change = 0; // rad
+};
+
+Motion Analyse(const SynthOptions& o, const std::vector<SE3>& poses) {
+  Motion m;
+  const double dt = 1.0 / o.fps;
+  std::vector<Eigen::Vector3d> accel;
+  std::vector<Eigen::Vector3d> omega;
+  for (std::size_t k = 0; k + 1 < poses.size(); ++k) {
+    const Eigen::Vector3d v = (poses[k + 1].translation() - poses[k].translation()) / dt;
+    m.max_speed_error = std::max(m.max_speed_error, std::abs(v.head<2>().norm() - o.speed) / o.speed);
+    omega.push_back((poses[k].rotation().Inverse() * poses[k + 1].rotation()).Log() / dt);
+    m.total_yaw_change += std::abs(omega.back().norm()) * dt;
+    if (k > 0) {
+      accel.push_back((poses[k + 1].translation() - 2 * poses[k].translation() + poses[k - 1].translation()) /
+                      (dt * dt));
+      m.max_accel = std::max(m.max_accel, accel.back().norm());
+    }
+  }
+  for (std::size_t k = 1; k < accel.size(); ++k) {
+    m.max_accel_jump = std::max(m.max_accel_jump, (accel[k] - accel[k - 1]).norm());
+  }
+  for (std::size_t k = 1; k < omega.size(); ++k) {
+    m.max_ang_accel = std::max(m.max_ang_accel, (omega[k] - omega[k - 1]).norm() / dt);
+  }
+  for (const SE3& pose : poses) {
+    const Eigen::Vector3d& p = pose.translation();
+    m.max_altitude_error = std::max(m.max_altitude_error, std::abs(p.z() - TerrainHeight(p.x(), p.y(), o) - o.altitude));
+  }
+  return m;
+}
+
+TEST(SynthTrajectory, SmoothAtRequestedSpeedAndAltitude) {
+  for (const auto kind : {TrajectoryKind::kLawnmower, TrajectoryKind::kLoop, TrajectoryKind::kOrbit}) {
+    SCOPED_TRACE(TrajectoryKindName(kind));
+    SynthOptions o;
+    o.trajectory = kind;
+    o.frames = 900;
+    o.pitch_deg = kind == TrajectoryKind::kOrbit ? 45 : 10;
+    const std::vector<SE3> poses = MakeTrajectory(o, Terrain(o));
+    ASSERT_EQ(poses.size(), 900u);
+    const Motion m = Analyse(o, poses);
+    EXPECT_LT(m.max_accel, 6.0);        // a gentle drone, no jumps in velocity
+    EXPECT_LT(m.max_accel_jump, 0.5);   // continuous acceleration (C2 path)
+    EXPECT_LT(m.max_ang_accel, 1.5);    // no jumps in heading rate
+    EXPECT_LT(m.max_speed_error, 0.05);
+    EXPECT_LT(m.max_altitude_error, o.relief);
+    EXPECT_GT(m.total_yaw_change, 0.5);  // the camera does turn along the way
+    // Nadir-ish camera: the optical axis points down.
+    for (const SE3& pose : poses) ASSERT_LT((pose.rotation() * Eigen::Vector3d::UnitZ()).z(), -0.5);
+  }
+}
+
+TEST(SynthTrajectory, LoopReturnsOverItsStart) {
+  SynthOptions o;
+  o.trajectory = TrajectoryKind::kLoop;
+  o.frames = 1500;
+  const std::vector<SE3> poses = MakeTrajectory(o, Terrain(o));
+  double far = 0;
+  double closest_late = 1e9;
+  for (std::size_t k = 0; k < poses.size(); ++k) {
+    const double d = (poses[k].translation() - poses[0].translation()).head<2>().norm();
+    far = std::max(far, d);
+    if (k > poses.size() * 3 / 4) closest_late = std::min(closest_late, d);
+  }
+  EXPECT_GT(far, 100.0);
+  EXPECT_LT(closest_late, 5.0);
+}
+
+TEST(SynthFiles, ClipFilesExistParseAndMatch) {
+  SynthOptions o = SmallOptions();
+  o.out = (fs::path(testing::TempDir()) / "glam_synth_files").string();
+  o.force = true;
+  RunSynth(o);
+  const fs::path dir(o.out);
+
+  std::vector<double> times;
+  const std::vector<SE3> tum = ReadTumTrajectory(dir / "gt_trajectory.tum", &times);
+  ASSERT_EQ(tum.size(), static_cast<std::size_t>(o.frames));
+  EXPECT_NEAR(times[1], 1.0 / o.fps, 1e-6);
+  const std::vector<SE3> poses = MakeTrajectory(o, Terrain(o));
+  for (int k = 0; k < o.frames; ++k) {
+    EXPECT_LT((tum[k].translation() - poses[k].translation()).norm(), 1e-6);
+    EXPECT_LT((tum[k].rotation().Inverse() * poses[k].rotation()).Log().norm(), 1e-9);
+  }
+
+  const Intrinsics in = ReadIntrinsicsJson(dir / "intrinsics.json");
+  const Intrinsics expected = MakeIntrinsics(o);
+  EXPECT_EQ(in.width, o.width);
+  EXPECT_EQ(in.height, o.height);
+  EXPECT_DOUBLE_EQ(in.fx, expected.fx);
+  EXPECT_NEAR(2 * std::atan(0.5 * o.width / in.fx) * 180 / M_PI, 60.0, 1e-9);
+
+  std::ifstream surface_file(dir / "gt_surface.json");
+  const nlohmann::json surface = nlohmann::json::parse(surface_file);
+  EXPECT_EQ(surface["format"], "glam-heightfield");
+  EXPECT_EQ(surface["version"], 1);
+  const auto cols = surface["cols"].get<std::size_t>();
+  const auto rows = surface["rows"].get<std::size_t>();
+  EXPECT_EQ(fs::file_size(dir / surface["heights"].get<std::string>()), cols * rows * sizeof(float));
+
+  cv::VideoCapture video((dir / "video.mp4").string(), cv::CAP_FFMPEG);
+  ASSERT_TRUE(video.isOpened());
+  int frames = 0;
+  cv::Mat frame;
+  while (video.read(frame)) {
+    EXPECT_EQ(frame.size(), cv::Size(o.width, o.height));
+    ++frames;
+  }
+  EXPECT_EQ(frames, o.frames);
+
+  std::ifstream meta_file(dir / "synth.json");
+  EXPECT_EQ(nlohmann::json::parse(meta_file), o.ToJson());
+  o.force = false;
+  EXPECT_TRUE(RunSynth(o).skipped);  // same options: nothing to do
+}
+
+TEST(SynthDeterminism, SameSeedSameWorldOtherSeedOtherWorld) {
+  SynthOptions o = SmallOptions();
+  o.frames = 5;
+  o.altitude = 30;
+  auto make = [](const SynthOptions& opts) {
+    const std::vector<SE3> poses = MakeTrajectory(opts, Terrain(opts));
+    return std::make_pair(poses, World::Generate(opts, poses));
+  };
+  const auto [poses1, world1] = make(o);
+  const auto [poses2, world2] = make(o);
+  EXPECT_EQ(world1.surface().heights(), world2.surface().heights());
+  EXPECT_EQ(cv::norm(world1.albedo()[0], world2.albedo()[0], cv::NORM_INF), 0.0);
+  for (std::size_t k = 0; k < poses1.size(); ++k) {
+    EXPECT_EQ(poses1[k].translation(), poses2[k].translation());
+  }
+  SynthOptions other = o;
+  other.seed = o.seed + 1;
+  const auto [poses3, world3] = make(other);
+  EXPECT_GT((poses3.back().translation() - poses1.back().translation()).norm(), 1.0);
+  const bool same_size = world3.surface().heights().size() == world1.surface().heights().size();
+  EXPECT_TRUE(!same_size || world3.surface().heights() != world1.surface().heights());
+}
+
+TEST(SynthOptions, DefaultsAreValid) { EXPECT_NO_THROW(SynthOptions().Check()); }
+
+TEST(SynthOptions, CheckRejectsNonsense) {
+  auto rejects = [](auto mutate) {
+    SynthOptions o;
+    mutate(o);
+    EXPECT_THROW(o.Check(), InputError);
+  };
+  rejects([](SynthOptions& o) { o.width = -640; });
+  rejects([](SynthOptions& o) { o.height = 0; });
+  rejects([](SynthOptions& o) { o.width = 641; });
+  rejects([](SynthOptions& o) { o.pitch_deg = 85; });
+  rejects([](SynthOptions& o) { o.pitch_deg = -5; });
+  rejects([](SynthOptions& o) { o.fps = 0; });
+  rejects([](SynthOptions& o) { o.frames = 0; });
+  rejects([](SynthOptions& o) { o.altitude = -100; });
+  rejects([](SynthOptions& o) { o.speed = 0; });
+  rejects([](SynthOptions& o) { o.focal = -1; });
+  rejects([](SynthOptions& o) { o.k1 = -0.5; o.k2 = -0.5; });  // not invertible in the image
+  rejects([](SynthOptions& o) { o.cell_size = 0; });
+  EXPECT_THROW(ParseTrajectoryKind("zigzag"), InputError);
+  EXPECT_EQ(ParseTrajectoryKind("orbit"), TrajectoryKind::kOrbit);
+}
+
+}  // namespace
+}  // namespace glam::synth

@@ -1,0 +1,108 @@
+#include <fstream>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+
+#include "engine/core/error.h"
+#include "engine/video/frame_source.h"
+#include "engine/video/image_folder_source.h"
+#include "tests/video/test_media.h"
+
+namespace glam {
+namespace {
+
+using testing::DecodeIndex;
+using testing::MakeFrame;
+
+class ImageFolderSourceTest : public testing::TempDirTest {
+ protected:
+  // frame_<n>.png holding index n, written in an order unlike the natural one.
+  void WriteImages(std::initializer_list<int> numbers, cv::Size size = {200, 100}) {
+    for (int n : numbers) {
+      ASSERT_TRUE(cv::imwrite((dir_ / ("frame_" + std::to_string(n) + ".png")).string(),
+                              MakeFrame(size, n)));
+    }
+  }
+};
+
+TEST_F(ImageFolderSourceTest, NaturalNameOrderSkipsNonImages) {
+  WriteImages({10, 2, 1, 33});
+  std::ofstream(dir_ / "notes.txt") << "not an image";
+  std::ofstream(dir_ / "frame_5.jpg.part") << "partial download";
+  std::filesystem::create_directory(dir_ / "sub.png");  // a folder named like an image
+
+  auto source = OpenFrameSource(dir_);
+  EXPECT_DOUBLE_EQ(source->info().fps, 1.0);
+  EXPECT_EQ(source->info().frame_count, 4);
+  EXPECT_EQ(source->info().original_size, cv::Size(200, 100));
+  std::vector<int> decoded;
+  std::vector<int64_t> indices;
+  while (auto frame = source->Next()) {
+    EXPECT_DOUBLE_EQ(frame->timestamp_s, static_cast<double>(frame->index));
+    decoded.push_back(DecodeIndex(frame->bgr, 40));
+    indices.push_back(frame->index);
+  }
+  EXPECT_EQ(decoded, (std::vector<int>{1, 2, 10, 33}));
+  EXPECT_EQ(indices, (std::vector<int64_t>{0, 1, 2, 3}));
+}
+
+TEST_F(ImageFolderSourceTest, StrideSeekAndDownscale) {
+  WriteImages({0, 1, 2, 3, 4, 5, 6}, {800, 400});
+  FrameSourceOptions options;
+  options.stride = 2;
+  options.max_image_size = 400;
+  auto source = OpenFrameSource(dir_, options);
+  EXPECT_EQ(source->info().processing_size, cv::Size(400, 200));
+  std::vector<int> decoded;
+  while (auto frame = source->Next()) {
+    EXPECT_EQ(frame->bgr.size(), cv::Size(400, 200));
+    EXPECT_EQ(frame->original_size, cv::Size(800, 400));
+    decoded.push_back(DecodeIndex(frame->bgr, 10));
+  }
+  EXPECT_EQ(decoded, (std::vector<int>{0, 2, 4, 6}));
+  source->SeekTo(5);
+  EXPECT_EQ(DecodeIndex(source->Next()->bgr, 10), 5);
+  EXPECT_THROW(source->SeekTo(7), InputError);
+}
+
+TEST_F(ImageFolderSourceTest, SkipsUndecodableAndMismatchedImages) {
+  WriteImages({1, 3});
+  std::ofstream(dir_ / "frame_2.png") << "broken";
+  ASSERT_TRUE(cv::imwrite((dir_ / "frame_4.png").string(), MakeFrame({100, 100}, 4)));
+  auto source = OpenFrameSource(dir_);
+  std::vector<int> decoded;
+  while (auto frame = source->Next()) decoded.push_back(DecodeIndex(frame->bgr, 10));
+  EXPECT_EQ(decoded, (std::vector<int>{1, 3}));
+}
+
+TEST_F(ImageFolderSourceTest, EmptyOrImagelessFolderIsInputError) {
+  EXPECT_THROW(OpenFrameSource(dir_), InputError);
+  std::ofstream(dir_ / "readme.md") << "# no images";
+  try {
+    OpenFrameSource(dir_);
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("no image files"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(ProbeVideo(dir_), InputError);
+}
+
+TEST(NaturalLess, OrdersDigitRunsByValue) {
+  EXPECT_TRUE(NaturalLess("img2.png", "img10.png"));
+  EXPECT_FALSE(NaturalLess("img10.png", "img2.png"));
+  EXPECT_TRUE(NaturalLess("a.png", "b.png"));
+  EXPECT_TRUE(NaturalLess("img.png", "img1.png"));
+  EXPECT_TRUE(NaturalLess("img007.png", "img08.png"));
+  EXPECT_FALSE(NaturalLess("x1", "x1"));
+  EXPECT_TRUE(NaturalLess("f99999999999999999999999.png", "f100000000000000000000000.png"));
+}
+
+TEST(HasImageExtension, CaseInsensitive) {
+  EXPECT_TRUE(HasImageExtension("a/B.JPG"));
+  EXPECT_TRUE(HasImageExtension("c.tiff"));
+  EXPECT_FALSE(HasImageExtension("d.txt"));
+  EXPECT_FALSE(HasImageExtension("noext"));
+}
+
+}  // namespace
+}  // namespace glam

@@ -1,0 +1,98 @@
+#include "tools/synth/synth.h"
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+
+#include <fmt/format.h>
+#include <opencv2/imgcodecs.hpp>
+
+#include "engine/core/error.h"
+#include "engine/core/intrinsics_io.h"
+#include "engine/core/logging.h"
+#include "tools/synth/ground_truth_writer.h"
+#include "tools/synth/renderer.h"
+#include "tools/synth/trajectory.h"
+#include "tools/synth/video_writer.h"
+#include "tools/synth/world.h"
+
+namespace glam::synth {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr const char* kOutputs[] = {"video.mp4", "gt_trajectory.tum", "intrinsics.json",
+                                    "gt_surface.json", "gt_heights.f32"};
+
+bool UpToDate(const SynthOptions& o, const fs::path& dir) {
+  if (!fs::exists(dir / "synth.json")) return false;
+  for (const char* name : kOutputs) {
+    if (!fs::exists(dir / name)) return false;
+  }
+  try {
+    std::ifstream in(dir / "synth.json");
+    const nlohmann::json old = nlohmann::json::parse(in);
+    return old == o.ToJson() && (!o.write_frames || fs::exists(dir / "frames"));
+  } catch (const nlohmann::json::exception&) {
+    return false;
+  }
+}
+
+double Seconds(std::chrono::steady_clock::time_point since) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
+}
+
+}  // namespace
+
+SynthReport RunSynth(const SynthOptions& o) {
+  o.Check();
+  if (o.out.empty()) throw InputError("synth: an output directory is required (--out)");
+  const fs::path dir(o.out);
+  SynthReport report;
+  if (!o.force && UpToDate(o, dir)) {
+    GLAM_LOG_INFO("synth: {} is up to date, not re-rendering", dir.string());
+    report.skipped = true;
+    return report;
+  }
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw EnvironmentError("cannot create " + dir.string() + ": " + ec.message());
+  fs::remove(dir / "synth.json", ec);  // an interrupted run must not look complete
+  if (o.write_frames) fs::create_directories(dir / "frames");
+
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::vector<SE3> poses =
+      MakeTrajectory(o, [&o](double x, double y) { return TerrainHeight(x, y, o); });
+  const World world = World::Generate(o, poses);
+  const Intrinsics intrinsics = MakeIntrinsics(o);
+  WriteIntrinsicsJson(intrinsics, dir / "intrinsics.json");
+  WriteTumTrajectory(poses, o.fps, dir / "gt_trajectory.tum");
+  world.surface().WriteGroundTruth(dir);
+  report.world_seconds = Seconds(t0);
+
+  const auto t1 = std::chrono::steady_clock::now();
+  const Renderer renderer(world, intrinsics);
+  VideoWriter video(dir / "video.mp4", o.width, o.height, o.fps, o.crf);
+  const int log_every = std::max(1, static_cast<int>(o.fps * 5));
+  for (int f = 0; f < o.frames; ++f) {
+    const cv::Mat frame = renderer.Render(poses[f]);
+    video.Write(frame);
+    if (o.write_frames) {
+      cv::imwrite((dir / "frames" / fmt::format("{:06d}.png", f)).string(), frame);
+    }
+    if ((f + 1) % log_every == 0 || f + 1 == o.frames) {
+      GLAM_LOG_INFO("synth: frame {}/{} ({:.1f} fps)", f + 1, o.frames, (f + 1) / Seconds(t1));
+    }
+  }
+  video.Close();
+  report.render_seconds = Seconds(t1);
+
+  nlohmann::json meta = o.ToJson();
+  WriteJson(meta, dir / "synth.json");
+  GLAM_LOG_INFO("synth: wrote {} ({} frames, world {:.1f} s, render {:.1f} s)", dir.string(),
+                o.frames, report.world_seconds, report.render_seconds);
+  return report;
+}
+
+}  // namespace glam::synth

@@ -1,0 +1,87 @@
+#include "tools/synth/synth_options.h"
+
+#include <cmath>
+#include <numbers>
+
+#include "engine/core/error.h"
+#include "engine/core/options.h"
+
+namespace glam::synth {
+
+TrajectoryKind ParseTrajectoryKind(const std::string& name) {
+  if (name == "lawnmower") return TrajectoryKind::kLawnmower;
+  if (name == "loop") return TrajectoryKind::kLoop;
+  if (name == "orbit") return TrajectoryKind::kOrbit;
+  throw InputError("unknown trajectory '" + name + "' (expected lawnmower, loop or orbit)");
+}
+
+std::string TrajectoryKindName(TrajectoryKind kind) {
+  switch (kind) {
+    case TrajectoryKind::kLawnmower: return "lawnmower";
+    case TrajectoryKind::kLoop: return "loop";
+    case TrajectoryKind::kOrbit: return "orbit";
+  }
+  return "?";
+}
+
+double SynthOptions::EffectiveFocal() const {
+  if (focal > 0) return focal;
+  const double half_fov = 30.0 * std::numbers::pi / 180.0;
+  return 0.5 * width / std::tan(half_fov);
+}
+
+void SynthOptions::Check() const {
+  CheckInRange("synth.altitude", altitude, 20.0, 1000.0);
+  CheckInRange("synth.pitch_deg", pitch_deg, 0.0, 80.0);
+  CheckInRange("synth.speed", speed, 0.5, 60.0);
+  CheckInRange("synth.wobble_deg", wobble_deg, 0.0, 10.0);
+  CheckInRange("synth.fps", fps, 1.0, 240.0);
+  CheckInRange("synth.frames", frames, 1, 1000000);
+  CheckInRange("synth.width", width, 16, 7680);
+  CheckInRange("synth.height", height, 16, 4320);
+  if (width % 2 != 0 || height % 2 != 0) {
+    throw InputError("synth.width and synth.height must be even (H.264 yuv420p)");
+  }
+  CheckGreaterEqual("synth.focal", focal, 0.0);
+  if (focal > 0) CheckInRange("synth.focal", focal, 0.1 * width, 20.0 * width);
+  CheckInRange("synth.k1", k1, -0.5, 0.5);
+  CheckInRange("synth.k2", k2, -0.5, 0.5);
+  CheckInRange("synth.relief", relief, 0.0, 200.0);
+  CheckInRange("synth.cell_size", cell_size, 0.1, 2.0);
+  CheckInRange("synth.building_density", building_density, 0.0, 3.0);
+  CheckInRange("synth.crf", crf, 0, 51);
+  // Distortion must stay invertible (monotonic radius) over the image corners, otherwise
+  // Camera::Unproject is ill-defined there and the render would fold over itself.
+  const double f = EffectiveFocal();
+  const double r_max = std::hypot(0.5 * width, 0.5 * height) / f;
+  for (int i = 1; i <= 100; ++i) {
+    const double r = r_max * i / 100.0;
+    const double derivative = 1 + 3 * k1 * r * r + 5 * k2 * r * r * r * r;
+    if (derivative <= 0.05) {
+      throw InputError("synth.k1/k2: distortion is not invertible inside the image");
+    }
+  }
+}
+
+nlohmann::json SynthOptions::ToJson() const {
+  return nlohmann::json{{"trajectory", TrajectoryKindName(trajectory)},
+                        {"altitude", altitude},
+                        {"pitch_deg", pitch_deg},
+                        {"speed", speed},
+                        {"wobble_deg", wobble_deg},
+                        {"fps", fps},
+                        {"frames", frames},
+                        {"width", width},
+                        {"height", height},
+                        {"focal", EffectiveFocal()},
+                        {"k1", k1},
+                        {"k2", k2},
+                        {"seed", seed},
+                        {"relief", relief},
+                        {"cell_size", cell_size},
+                        {"building_density", building_density},
+                        {"crf", crf},
+                        {"generator", "glam synth 1"}};
+}
+
+}  // namespace glam::synth

@@ -1,0 +1,58 @@
+// Options of `glam synth`, the synthetic aerial video renderer. Defaults give a useful clip on
+// their own (`glam synth --out DIR`): 1280x720 at 30 fps, 60 deg horizontal field of view,
+// a lawnmower survey 100 m above the ground at 10 m/s over rolling terrain with a village.
+// Everything is deterministic from `seed`, so a clip is fully described by its synth.json.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+namespace glam::synth {
+
+enum class TrajectoryKind { kLawnmower, kLoop, kOrbit };
+
+// "lawnmower" | "loop" | "orbit"; throws InputError for anything else.
+TrajectoryKind ParseTrajectoryKind(const std::string& name);
+std::string TrajectoryKindName(TrajectoryKind kind);
+
+struct SynthOptions {
+  // --- flight ---
+  TrajectoryKind trajectory = TrajectoryKind::kLawnmower;
+  double altitude = 100.0;   // metres above the (smoothed) terrain under the drone
+  double pitch_deg = 0.0;    // camera tilt forward from nadir: 0 = straight down
+  double speed = 10.0;       // m/s along the path
+  double wobble_deg = 1.5;   // amplitude of slow, smooth attitude perturbations
+  double fps = 30.0;
+  int frames = 600;
+
+  // --- camera ---
+  int width = 1280;
+  int height = 720;
+  double focal = 0.0;  // pixels; 0 = horizontal field of view of 60 degrees
+  double k1 = 0.0;
+  double k2 = 0.0;
+
+  // --- world ---
+  std::uint64_t seed = 1;
+  double relief = 12.0;            // terrain height amplitude (m), heights lie in about +-relief
+  double cell_size = 0.5;          // ground-truth heightfield resolution (m)
+  double building_density = 1.0;   // 0 = no buildings, 1 = default village density
+
+  // --- output ---
+  std::string out;          // output directory (required by the CLI)
+  bool write_frames = false;  // also write frames/NNNNNN.png
+  int crf = 16;               // H.264 quality (lower = better; 16 keeps texture for SIFT)
+  bool force = false;         // re-render even if `out` already holds this exact clip
+
+  // Focal length actually used (resolves focal == 0).
+  double EffectiveFocal() const;
+
+  // Throws InputError naming the field on nonsense (negative sizes, pitch > 80 deg, ...).
+  void Check() const;
+
+  nlohmann::json ToJson() const;
+};
+
+}  // namespace glam::synth

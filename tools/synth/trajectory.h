@@ -1,0 +1,27 @@
+// Smooth drone flights for the synthetic videos. Paths are C2 curves (a cubic B-spline for
+// the lawnmower, closed analytic curves for loop and orbit) flown at constant speed by
+// arc-length reparameterisation, so velocity and heading never jump. Altitude follows the
+// terrain smoothed along the path (like a drone holding height above ground), and a slow
+// attitude wobble adds the small rotations a real gimbal never fully removes.
+#pragma once
+
+#include <functional>
+#include <vector>
+
+#include "engine/core/se3.h"
+#include "tools/synth/synth_options.h"
+
+namespace glam::synth {
+
+// Ground height (terrain without buildings) at (x, y).
+using TerrainFn = std::function<double(double x, double y)>;
+
+// Camera frame: OpenCV (x right, y down, z forward). Heading psi is the direction the top of
+// the image points to, measured counter-clockwise from +x (east); pitch tilts the optical
+// axis from nadir (0) towards that heading.
+SO3 CameraRotation(double heading, double pitch, double roll = 0.0);
+
+// world_from_cam for frames 0 .. options.frames - 1 (time = index / fps).
+std::vector<SE3> MakeTrajectory(const SynthOptions& options, const TerrainFn& terrain);
+
+}  // namespace glam::synth
