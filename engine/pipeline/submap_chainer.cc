@@ -3,14 +3,12 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <optional>
-#include <random>
 
 #include "engine/core/error.h"
 #include "engine/core/logging.h"
 #include "engine/core/options.h"
-#include "engine/core/similarity_alignment.h"
 #include "engine/features/feature_matcher.h"
+#include "engine/geometry/similarity_ransac.h"
 
 namespace glam {
 
@@ -52,83 +50,6 @@ cv::Mat LandmarkDescriptors(const Submap& submap) {
   return out;
 }
 
-namespace {
-
-std::vector<int> CountInliers(const Sim3& model, const std::vector<Eigen::Vector3d>& source,
-                              const std::vector<Eigen::Vector3d>& target, double threshold) {
-  std::vector<int> inliers;
-  const double t2 = threshold * threshold;
-  for (std::size_t i = 0; i < source.size(); ++i) {
-    if ((model * source[i] - target[i]).squaredNorm() <= t2) inliers.push_back(static_cast<int>(i));
-  }
-  return inliers;
-}
-
-std::optional<SimilarityAlignmentResult> Fit(const std::vector<Eigen::Vector3d>& source,
-                                             const std::vector<Eigen::Vector3d>& target,
-                                             const std::vector<int>& rows) {
-  std::vector<Eigen::Vector3d> s, t;
-  s.reserve(rows.size());
-  t.reserve(rows.size());
-  for (int r : rows) {
-    s.push_back(source[static_cast<std::size_t>(r)]);
-    t.push_back(target[static_cast<std::size_t>(r)]);
-  }
-  try {
-    return AlignSimilarity(s, t, true);
-  } catch (const InputError&) {
-    return std::nullopt;  // degenerate (collinear) sample
-  }
-}
-
-}  // namespace
-
-Sim3RansacResult EstimateSim3Ransac(const std::vector<Eigen::Vector3d>& source,
-                                    const std::vector<Eigen::Vector3d>& target, double threshold,
-                                    const ChainingOptions& options) {
-  GLAM_CHECK(source.size() == target.size(), "correspondence sizes differ");
-  Sim3RansacResult result;
-  const int n = static_cast<int>(source.size());
-  if (n < 3) return result;
-  std::mt19937 rng(options.seed);
-  std::uniform_int_distribution<int> pick(0, n - 1);
-  std::vector<int> best;
-  int needed = options.max_iterations;
-  for (int it = 0; it < needed; ++it) {
-    int a = pick(rng), b = pick(rng), c = pick(rng);
-    if (a == b || b == c || a == c) continue;
-    const auto fit = Fit(source, target, {a, b, c});
-    if (!fit) continue;
-    std::vector<int> inliers = CountInliers(fit->target_from_source, source, target, threshold);
-    if (inliers.size() > best.size()) {
-      best = std::move(inliers);
-      const double w = static_cast<double>(best.size()) / n;
-      const double p_fail = 1.0 - w * w * w;
-      if (p_fail <= 1e-12) {
-        needed = it + 1;
-      } else {
-        const double k = std::log(1.0 - options.confidence) / std::log(p_fail);
-        needed = std::min(options.max_iterations, static_cast<int>(std::ceil(k)) + 1);
-      }
-    }
-  }
-  if (best.size() < 3) return result;
-  // Refit on all inliers, re-collect, refit once more (standard local optimisation).
-  for (int round = 0; round < 2; ++round) {
-    const auto fit = Fit(source, target, best);
-    if (!fit) return result;
-    std::vector<int> inliers = CountInliers(fit->target_from_source, source, target, threshold);
-    if (inliers.size() < best.size() && round > 0) break;
-    result.target_from_source = fit->target_from_source;
-    result.inlier_rmse = fit->rmse;
-    if (inliers.size() < 3) return result;
-    best = std::move(inliers);
-  }
-  result.inliers = best;
-  result.success = true;
-  return result;
-}
-
 ChainResult LinkSubmaps(const Submap& previous, const Submap& next, const ChainingOptions& options) {
   ChainResult out;
   if (previous.landmarks.size() < 3 || next.landmarks.size() < 3) return out;
@@ -138,22 +59,30 @@ ChainResult LinkSubmaps(const Submap& previous, const Submap& next, const Chaini
   const std::vector<Match> matches =
       MatchDescriptors(LandmarkDescriptors(next), LandmarkDescriptors(previous), match_options);
   out.matches = static_cast<int>(matches.size());
-  std::vector<Eigen::Vector3d> source, target;
-  source.reserve(matches.size());
-  target.reserve(matches.size());
+  std::vector<PointCorrespondence> data;
+  data.reserve(matches.size());
   for (const Match& m : matches) {
-    source.push_back(next.landmarks[static_cast<std::size_t>(m.query)].point_in_submap);
-    target.push_back(previous.landmarks[static_cast<std::size_t>(m.train)].point_in_submap);
+    data.push_back({next.landmarks[static_cast<std::size_t>(m.query)].point_in_submap,
+                    previous.landmarks[static_cast<std::size_t>(m.train)].point_in_submap});
   }
   const double threshold = options.inlier_threshold_fraction * SubmapScale(previous);
-  const Sim3RansacResult ransac = EstimateSim3Ransac(source, target, threshold, options);
-  out.inliers = static_cast<int>(ransac.inliers.size());
-  out.inlier_rmse = ransac.inlier_rmse;
+  RansacOptions ransac_options;
+  ransac_options.inlier_threshold = threshold;
+  ransac_options.max_iterations = options.max_iterations;
+  ransac_options.confidence = options.confidence;
+  ransac_options.seed = options.seed;
+  const RansacResult<Sim3> ransac = EstimateSimilarity(data, ransac_options);
+  out.inliers = ransac.num_inliers;
+  double sum_sq = 0;
+  for (std::size_t i = 0; i < data.size(); ++i) {
+    if (ransac.inlier_mask[i]) sum_sq += (ransac.model * data[i].source - data[i].target).squaredNorm();
+  }
+  out.inlier_rmse = out.inliers > 0 ? std::sqrt(sum_sq / out.inliers) : 0.0;
   const bool enough = ransac.success && out.inliers >= options.min_inliers &&
                       out.inliers >= options.min_inlier_ratio * out.matches;
   if (enough) {
     out.linked = true;
-    out.prev_from_new = ransac.target_from_source;
+    out.prev_from_new = ransac.model;
   }
   GLAM_LOG_DEBUG("link submap {} -> {}: {} matches, {} inliers, rmse {:.4g} (threshold {:.4g}){}",
                  next.id, previous.id, out.matches, out.inliers, out.inlier_rmse, threshold,

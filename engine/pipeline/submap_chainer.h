@@ -46,19 +46,8 @@ double SubmapScale(const Submap& submap);
 // Landmark descriptors as CV_32F rows (byte / 512, the inverse of the builder's quantisation).
 cv::Mat LandmarkDescriptors(const Submap& submap);
 
-// Robust similarity target_from_source over correspondences (source[i] <-> target[i]):
-// 3-point Umeyama samples, inliers within `threshold` (target units), refit on inliers.
-struct Sim3RansacResult {
-  bool success = false;
-  Sim3 target_from_source;
-  std::vector<int> inliers;
-  double inlier_rmse = 0;
-};
-Sim3RansacResult EstimateSim3Ransac(const std::vector<Eigen::Vector3d>& source,
-                                    const std::vector<Eigen::Vector3d>& target, double threshold,
-                                    const ChainingOptions& options);
-
-// Matches the two submaps' landmarks and verifies them with Sim3 RANSAC.
+// Matches the two submaps' landmarks and verifies them with Sim3 RANSAC (the project's RANSAC
+// template with the similarity estimator of engine/geometry).
 ChainResult LinkSubmaps(const Submap& previous, const Submap& next,
                         const ChainingOptions& options = {});
 

@@ -11,7 +11,9 @@
 #include <unordered_set>
 
 #include "engine/core/logging.h"
+#include "engine/features/feature_grid.h"
 #include "engine/features/feature_matcher.h"
+#include "engine/features/guided_matcher.h"
 #include "engine/geometry/essential.h"
 #include "engine/geometry/triangulation.h"
 #include "engine/submap/submap_builder.h"
@@ -51,6 +53,7 @@ void SubmapBuilder::InsertKeyframes(std::size_t current_position) {
       }
     }
   }
+  const std::size_t first_new = open_.landmarks.size();
   if (middle) {
     AddKeyframe(*middle);
     TriangulateBetween(*middle, current_position);
@@ -58,7 +61,49 @@ void SubmapBuilder::InsertKeyframes(std::size_t current_position) {
     TriangulateBetween(previous, current_position);
   }
   AddKeyframe(current_position);
+  if (options_.extend_new_tracks) ObserveNewLandmarksInEarlierKeyframes(first_new);
   OptimiseAndFilter();
+}
+
+void SubmapBuilder::ObserveNewLandmarksInEarlierKeyframes(std::size_t first_new) {
+  // New landmarks are triangulated from two close views; finding them in earlier keyframes
+  // (projection + descriptor match nearby) lengthens their tracks and the BA baseline, which
+  // is what makes their depth precise. Keyframes that already observe them are skipped.
+  if (first_new >= open_.landmarks.size() || open_.keyframes.size() < 3) return;
+  const Camera camera = CurrentCamera();
+  const double radius = options_.max_new_point_reprojection_pixels * 2.0;
+  std::vector<int> rows;
+  for (std::size_t i = first_new; i < open_.landmarks.size(); ++i) rows.push_back(static_cast<int>(i));
+  cv::Mat descriptors(static_cast<int>(rows.size()), kDescriptorSize, CV_32F);
+  for (int r = 0; r < descriptors.rows; ++r) DequantizeDescriptor(open_.landmarks[rows[r]].descriptor, descriptors.ptr<float>(r));
+  const std::size_t newest_two = open_.keyframes.size() - 2;  // middle and current observe them
+  std::size_t added = 0;
+  for (std::size_t k = 0; k < newest_two; ++k) {
+    const FrameRecord& frame = open_.frames[open_.keyframe_frame_positions[k]];
+    std::vector<Eigen::Vector2d> predicted(rows.size(), Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN()));
+    bool any = false;
+    for (std::size_t r = 0; r < rows.size(); ++r) {
+      Eigen::Vector2d px;
+      if (camera.Project(open_.keyframes[k].cam_from_submap * open_.landmarks[rows[r]].point_in_submap, &px) &&
+          camera.InImage(px)) {
+        predicted[r] = px;
+        any = true;
+      }
+    }
+    if (!any) continue;
+    std::vector<Eigen::Vector2d> points(frame.features.points.size());
+    for (std::size_t i = 0; i < points.size(); ++i) points[i] = frame.features.points[i].cast<double>();
+    const FeatureGrid grid(points, camera.intrinsics().width, camera.intrinsics().height, radius);
+    GuidedMatchOptions guided;
+    guided.radius_px = radius;
+    guided.ratio = static_cast<float>(options_.match_ratio);
+    for (const Match& m : MatchGuided(descriptors, predicted, frame.features.FloatDescriptors(), grid, guided)) {
+      open_.landmarks[rows[m.query]].observations.push_back(
+          {static_cast<std::uint32_t>(k), frame.features.points[m.train]});
+      ++added;
+    }
+  }
+  GLAM_LOG_TRACE("{} observations of new landmarks found in earlier keyframes", added);
 }
 
 std::size_t SubmapBuilder::TriangulateBetween(std::size_t first_position, std::size_t second_position) {

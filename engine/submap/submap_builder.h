@@ -93,6 +93,7 @@ class SubmapBuilder {
   // keyframe_insertion.cc
   void InsertKeyframes(std::size_t current_position);
   void AddKeyframe(std::size_t position);
+  void ObserveNewLandmarksInEarlierKeyframes(std::size_t first_new);
   std::size_t TriangulateBetween(std::size_t first_position, std::size_t second_position);
   void OptimiseAndFilter();
   void UpdateFocalEstimate();

@@ -47,6 +47,10 @@ struct SubmapOptions {
   // middle keyframe / current frame pair can triangulate.
   double min_triangulation_angle_deg = 1.0;
   double max_new_point_reprojection_pixels = 3.0;
+  // Look for new landmarks in earlier keyframes too (longer tracks). Off by default: on
+  // repetitive texture it adds wrong observations faster than it adds baseline (measured on
+  // the synthetic lawnmower clip: map median error 0.29 m -> 0.9 m).
+  bool extend_new_tracks = false;
 
   // Memory bound: a submap that reaches this many frames is completed regardless of its
   // keyframe count (keeps per-frame feature storage bounded on a hovering drone).
