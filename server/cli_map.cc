@@ -96,10 +96,15 @@ void RunMap(MapArgs& args) {
   std::signal(SIGTERM, SIG_DFL);
   if (tty) std::cerr << "\n";
   std::cerr << fmt::format(
-      "glam map: {} frames, {} posed, {} submaps ({} disconnected), {} keyframes, {} points, "
-      "focal {:.1f} px, {:.1f} fps -> {}\n",
-      report.frames_decoded, report.frames_posed, report.submaps, report.disconnected_submaps,
-      report.keyframes, report.points, report.focal_original, report.processing_fps, args.out);
+      "glam map: {} frames, {} posed, {} unposed, {} submaps ({} disconnected), {} keyframes, "
+      "{} points, focal {:.1f} px, {:.1f} fps -> {}\n",
+      report.frames_decoded, report.frames_posed, report.frames_unposed, report.submaps,
+      report.disconnected_submaps, report.keyframes, report.points, report.focal_original,
+      report.processing_fps, args.out);
+  // Repeated after the progress output so the reason for a poor result is the last thing read.
+  for (const std::string& warning : report.warnings) {
+    std::cerr << "glam map: warning: " << warning << "\n";
+  }
 }
 
 }  // namespace

@@ -74,7 +74,7 @@ void WriteTumTrajectory(const std::filesystem::path& path, const std::vector<Tim
   for (const TimedPose& p : poses) {
     const Eigen::Vector3d& t = p.world_from_cam.translation();
     const Eigen::Quaterniond& q = p.world_from_cam.rotation().quaternion();
-    ok = ok && std::fprintf(f, "%.9f %.9g %.9g %.9g %.9g %.9g %.9g %.9g\n", p.timestamp, t.x(),
+    ok = ok && std::fprintf(f, "%.9f %.12g %.12g %.12g %.12g %.12g %.12g %.12g\n", p.timestamp, t.x(),
                             t.y(), t.z(), q.x(), q.y(), q.z(), q.w()) > 0;
   }
   ok = (std::fclose(f) == 0) && ok;

@@ -60,8 +60,13 @@ void WriteJson(const std::filesystem::path& path, const nlohmann::json& json) {
 class DecoderWorker {
  public:
   DecoderWorker(FrameSource& source, const SiftOptions& sift, BoundedQueue<FrameFeatures>& queue,
-                CancellationToken cancel, const std::atomic<bool>& stop)
-      : source_(source), extractor_(sift), queue_(queue), cancel_(std::move(cancel)), stop_(stop) {}
+                CancellationToken cancel, const std::atomic<bool>& stop, std::size_t min_features)
+      : source_(source),
+        extractor_(sift),
+        queue_(queue),
+        cancel_(std::move(cancel)),
+        stop_(stop),
+        min_features_(min_features) {}
 
   void Run() {
     try {
@@ -72,6 +77,7 @@ class DecoderWorker {
         FrameFeatures item{frame->index, frame->timestamp_s, extractor_.Extract(frame->bgr)};
         busy_seconds_ += Seconds(start);
         ++frames_;
+        if (item.features.size() < min_features_) ++frames_without_features_;
         if (!queue_.Push(std::move(item))) break;  // consumer closed the queue
       }
     } catch (...) {
@@ -83,6 +89,7 @@ class DecoderWorker {
   std::exception_ptr error() const { return error_; }
   double busy_seconds() const { return busy_seconds_; }
   std::int64_t frames() const { return frames_; }
+  std::int64_t frames_without_features() const { return frames_without_features_; }
 
  private:
   FrameSource& source_;
@@ -90,10 +97,52 @@ class DecoderWorker {
   BoundedQueue<FrameFeatures>& queue_;
   CancellationToken cancel_;
   const std::atomic<bool>& stop_;
+  const std::size_t min_features_;
   std::exception_ptr error_;
   double busy_seconds_ = 0;
   std::int64_t frames_ = 0;
+  std::int64_t frames_without_features_ = 0;
 };
+
+// The user-facing explanation of what could not be mapped (see MappingReport::warnings).
+std::vector<std::string> Diagnose(const MappingReport& r, int min_features) {
+  std::vector<std::string> warnings;
+  if (r.input_ended_early) {
+    warnings.push_back(fmt::format(
+        "the input ended after {} frames were read although {} were expected: the file is "
+        "truncated or corrupt; only the frames before the damage were mapped",
+        r.frames_decoded, r.frames_total));
+  }
+  if (r.frames_without_features == r.frames_decoded) {
+    warnings.push_back(fmt::format(
+        "no features in any of the {} frames (fewer than {} each): the video is black, uniform "
+        "or textureless, so nothing can be mapped",
+        r.frames_decoded, min_features));
+    return warnings;
+  }
+  if (r.frames_without_features * 10 >= r.frames_decoded) {
+    warnings.push_back(fmt::format(
+        "no features in {} of {} frames (fewer than {} each): dark, uniform or blurred frames "
+        "cannot be posed",
+        r.frames_without_features, r.frames_decoded, min_features));
+  }
+  if (r.submaps == 0 && r.keyframes > 0) {
+    warnings.push_back(fmt::format(
+        "none of the {} frames could be posed: maps were started but none reached 3 keyframes "
+        "(too short a clip or too little motion; tracking lost {} times)",
+        r.frames_decoded, r.tracking_losses));
+  } else if (r.submaps == 0) {
+    warnings.push_back(fmt::format(
+        "none of the {} frames could be posed: no pair of frames had enough parallax to start a "
+        "map (a static or hovering camera, or too short a clip), or consecutive frames do not "
+        "overlap",
+        r.frames_decoded));
+  } else if (r.frames_unposed * 10 >= r.frames_decoded) {
+    warnings.push_back(fmt::format("{} of {} frames could not be posed (see trajectory.tum)",
+                                   r.frames_unposed, r.frames_decoded));
+  }
+  return warnings;
+}
 
 }  // namespace
 
@@ -102,6 +151,8 @@ nlohmann::json MappingReport::ToJson() const {
           {"frames_total", frames_total},
           {"frames_decoded", frames_decoded},
           {"frames_posed", frames_posed},
+          {"frames_unposed", frames_unposed},
+          {"frames_without_features", frames_without_features},
           {"keyframes", keyframes},
           {"submaps", submaps},
           {"submaps_discarded", submaps_discarded},
@@ -115,6 +166,7 @@ nlohmann::json MappingReport::ToJson() const {
           {"processing_fps", processing_fps},
           {"processing_size", {processing_width, processing_height}},
           {"input_ended_early", input_ended_early},
+          {"warnings", warnings},
           {"timings_s",
            {{"decode_and_features", timings.decode_and_features_s},
             {"builder", timings.builder_s},
@@ -154,7 +206,9 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   MapAssembler assembler(options.chaining, options.leveling);
   BoundedQueue<FrameFeatures> queue(options.queue_capacity);
   std::atomic<bool> stop{false};
-  DecoderWorker worker(*source, options.sift, queue, cancel, stop);
+  const int min_features = options.submap.min_tracking_inliers;
+  DecoderWorker worker(*source, options.sift, queue, cancel, stop,
+                       static_cast<std::size_t>(min_features));
   std::thread decoder([&worker] { worker.Run(); });
 
   MappingProgress state;
@@ -236,6 +290,8 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   const SubmapBuilderStats& stats = builder.stats();
   report.frames_decoded = worker.frames();
   report.frames_posed = assembler.frames_posed();
+  report.frames_unposed = report.frames_decoded - report.frames_posed;
+  report.frames_without_features = worker.frames_without_features();
   report.keyframes = stats.keyframes;
   report.submaps = static_cast<std::int64_t>(assembler.nodes().size());
   report.submaps_discarded = stats.submaps_discarded;
@@ -254,12 +310,9 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   report.processing_fps = report.timings.total_s > 0
                               ? static_cast<double>(report.frames_decoded) / report.timings.total_s
                               : 0;
+  report.warnings = Diagnose(report, min_features);
+  for (const std::string& warning : report.warnings) GLAM_LOG_WARN("{}: {}", report.input, warning);
   WriteJson(out_dir / "report.json", report.ToJson());
-  if (report.submaps == 0) {
-    GLAM_LOG_WARN("{}: no submap could be built ({} frames decoded); the video may be "
-                  "textureless, static or too short",
-                  report.input, report.frames_decoded);
-  }
   state.stage = "done";
   state.frames_done = report.frames_decoded;
   emit(true);

@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -34,6 +35,10 @@ struct MappingReport {
   std::int64_t frames_total = -1;  // expected after stride (container estimate)
   std::int64_t frames_decoded = 0;
   std::int64_t frames_posed = 0;
+  std::int64_t frames_unposed = 0;  // decoded but absent from trajectory.tum
+  // Frames with fewer SIFT features than tracking needs (SubmapOptions::min_tracking_inliers):
+  // black, uniform, overexposed or badly blurred frames, which can never be posed.
+  std::int64_t frames_without_features = 0;
   std::int64_t keyframes = 0;
   std::int64_t submaps = 0;
   std::int64_t submaps_discarded = 0;
@@ -48,6 +53,10 @@ struct MappingReport {
   int processing_width = 0;
   int processing_height = 0;
   bool input_ended_early = false;
+  // Why frames or the whole input could not be mapped, in words for the user (also logged).
+  // Bad footage (textureless, static, truncated) completes with these rather than failing:
+  // the run did what the input allows, and the report says what is missing and why.
+  std::vector<std::string> warnings;
   MappingTimings timings;
 
   nlohmann::json ToJson() const;

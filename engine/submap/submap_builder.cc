@@ -124,7 +124,18 @@ std::vector<Submap> SubmapBuilder::Finish() {
     finishing_ = false;
   }
   if (open_.bootstrapped && static_cast<int>(open_.keyframes.size()) < 3) {
-    // The posed non-keyframe farthest from every keyframe becomes one more keyframe.
+    // The last tracked frame closes the submap as a keyframe (with a middle keyframe and new
+    // landmarks, as usual) ...
+    for (std::size_t p = open_.frames.size(); p-- > open_.keyframe_frame_positions.back() + 1;) {
+      if (open_.frames[p].cam_from_submap) {
+        InsertKeyframes(p);
+        break;
+      }
+    }
+  }
+  if (open_.bootstrapped && static_cast<int>(open_.keyframes.size()) < 3) {
+    // ... or, when the second keyframe is the last frame, the posed non-keyframe farthest from
+    // every keyframe becomes one more keyframe.
     std::optional<std::size_t> best;
     std::size_t best_gap = 0;
     for (std::size_t p = 0; p < open_.frames.size(); ++p) {

@@ -69,7 +69,12 @@ Submap SubmapBuilder::Complete() {
     submap.frame_poses.push_back(pose);
   }
   submap.stats.landmarks_removed = static_cast<std::uint32_t>(before - open_.landmarks.size());
-  for (const Keyframe& kf : open_.keyframes) completed_keyframe_focals_.push_back(kf.focal);
+  std::string focals;
+  for (const Keyframe& kf : open_.keyframes) {
+    completed_keyframe_focals_.push_back(kf.focal);
+    focals += fmt::format(" {:.1f}", kf.focal);
+  }
+  GLAM_LOG_DEBUG("submap {} keyframe focals:{}", submap.id, focals);
   UpdateFocalEstimate();
   ++stats_.submaps_completed;
   GLAM_LOG_INFO("submap {} complete: frames {}-{}, {} keyframes, {} landmarks, {} frames posed, focal {:.1f}",

@@ -86,9 +86,14 @@ ImageFolderSource::ImageFolderSource(const std::filesystem::path& folder,
     return NaturalLess(a.filename().string(), b.filename().string());
   });
 
-  const cv::Mat first = ReadImage(files_.front());
+  // The first *decodable* image sets the size: junk with an image name that sorts first (macOS
+  // "._0001.jpg" resource forks on SD cards) must not reject the whole folder. Next() skips
+  // the undecodable ones again, with a warning each.
+  cv::Mat first;
+  for (std::size_t i = 0; i < files_.size() && first.empty(); ++i) first = ReadImage(files_[i]);
   if (first.empty()) {
-    throw InputError(fmt::format("cannot decode image '{}'", files_.front().string()));
+    throw InputError(fmt::format("image folder '{}': none of its {} image files can be decoded",
+                                 folder.string(), files_.size()));
   }
   info_.fps = 1.0;
   info_.frame_count = static_cast<int64_t>(files_.size());

@@ -1,7 +1,8 @@
 // A folder of photos or extracted frames, in natural name order (frame_2 before frame_10), at
 // fps = 1 so that timestamp = index. Files that are not images (by extension) are ignored;
 // images that fail to decode or whose size differs from the first image are skipped with a
-// warning (their index stays reserved, so indices always match the sorted file list).
+// warning (their index stays reserved, so indices always match the sorted file list). The
+// first image that decodes sets the size.
 #pragma once
 
 #include <filesystem>
@@ -14,8 +15,8 @@ namespace glam {
 
 class ImageFolderSource : public FrameSource {
  public:
-  // Throws InputError when the folder is missing, holds no image files, or its first image
-  // cannot be decoded.
+  // Throws InputError when the folder is missing, holds no image files, or none of them
+  // decodes.
   ImageFolderSource(const std::filesystem::path& folder, const FrameSourceOptions& options);
 
   std::optional<Frame> Next() override;

@@ -13,6 +13,8 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
+#include "engine/export/tum_trajectory.h"
+
 #include "engine/core/camera.h"
 #include "engine/core/error.h"
 #include "engine/core/intrinsics_io.h"
@@ -228,10 +230,11 @@ TEST(SynthFiles, ClipFilesExistParseAndMatch) {
   RunSynth(o);
   const fs::path dir(o.out);
 
-  std::vector<double> times;
-  const std::vector<SE3> tum = ReadTumTrajectory(dir / "gt_trajectory.tum", &times);
-  ASSERT_EQ(tum.size(), static_cast<std::size_t>(o.frames));
-  EXPECT_NEAR(times[1], 1.0 / o.fps, 1e-6);
+  const std::vector<TimedPose> timed = ReadTumTrajectory(dir / "gt_trajectory.tum");
+  ASSERT_EQ(timed.size(), static_cast<std::size_t>(o.frames));
+  EXPECT_NEAR(timed[1].timestamp, 1.0 / o.fps, 1e-6);
+  std::vector<SE3> tum;
+  for (const TimedPose& p : timed) tum.push_back(p.world_from_cam);
   const std::vector<SE3> poses = MakeTrajectory(o, Terrain(o));
   for (int k = 0; k < o.frames; ++k) {
     EXPECT_LT((tum[k].translation() - poses[k].translation()).norm(), 1e-6);

@@ -10,6 +10,7 @@
 #include "engine/core/error.h"
 #include "engine/core/intrinsics_io.h"
 #include "engine/core/logging.h"
+#include "engine/export/tum_trajectory.h"
 #include "tools/synth/ground_truth_writer.h"
 #include "tools/synth/renderer.h"
 #include "tools/synth/trajectory.h"
@@ -67,7 +68,9 @@ SynthReport RunSynth(const SynthOptions& o) {
   const World world = World::Generate(o, poses);
   const Intrinsics intrinsics = MakeIntrinsics(o);
   WriteIntrinsicsJson(intrinsics, dir / "intrinsics.json");
-  WriteTumTrajectory(poses, o.fps, dir / "gt_trajectory.tum");
+  std::vector<TimedPose> timed(poses.size());
+  for (std::size_t i = 0; i < poses.size(); ++i) timed[i] = {static_cast<double>(i) / o.fps, poses[i]};
+  WriteTumTrajectory(dir / "gt_trajectory.tum", timed);
   world.surface().WriteGroundTruth(dir);
   report.world_seconds = Seconds(t0);
 
