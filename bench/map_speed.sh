@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# End-to-end speed of `glam map` on a synthetic 1280x720 clip, with the decode-only rate of
+# the same video beside it (the physical limit) and the time per stage from report.json.
+# Usage: bench/map_speed.sh [BUILD_DIR] [FRAMES]   (defaults: build, 300)
+# Prints one table; numbers go to docs/benchmarks.md by hand.
+set -euo pipefail
+BUILD_DIR="${1:-build}"
+FRAMES="${2:-300}"
+GLAM="$BUILD_DIR/server/glam"
+WORK="out/bench/map_speed_${FRAMES}"
+mkdir -p "$WORK"
+
+"$GLAM" --log-level warn synth --trajectory lawnmower --frames "$FRAMES" --width 1280 --height 720 \
+  --altitude 100 --seed 3 --out "$WORK/gt"
+
+decode_start=$(date +%s.%N)
+ffmpeg -loglevel error -threads 2 -i "$WORK/gt/video.mp4" -f null -
+decode_end=$(date +%s.%N)
+
+"$GLAM" --log-level warn map "$WORK/gt/video.mp4" --intrinsics "$WORK/gt/intrinsics.json" \
+  --out "$WORK/map" > /dev/null
+"$GLAM" --log-level warn eval --gt "$WORK/gt" --result "$WORK/map" --json "$WORK/eval.json" > /dev/null
+
+python3 - "$WORK" "$FRAMES" "$decode_start" "$decode_end" <<'PY'
+import json, sys
+work, frames, d0, d1 = sys.argv[1], int(sys.argv[2]), float(sys.argv[3]), float(sys.argv[4])
+r = json.load(open(f"{work}/map/report.json"))
+e = json.load(open(f"{work}/eval.json"))
+t = r["timings_s"]
+print(f"frames {frames} at 1280x720 ({r['processing_size'][0]}x{r['processing_size'][1]} processed)")
+print(f"decode only (ffmpeg, 2 threads): {frames / (d1 - d0):.1f} fps")
+print(f"glam map end to end:            {r['processing_fps']:.1f} fps ({t['total']:.1f} s)")
+print(f"  decode + SIFT thread busy {t['decode_and_features']:.1f} s, builder {t['builder']:.1f} s "
+      f"(bundle adjustment {t['bundle_adjustment']:.1f} s), chaining {t['chaining']:.2f} s, writing {t['writing']:.2f} s")
+print(f"  posed {r['frames_posed']}/{r['frames_decoded']}, submaps {r['submaps']}, keyframes {r['keyframes']}, points {r['points']}")
+tr, m = e["trajectory"], e.get("map") or {}
+print(f"  accuracy: ATE {tr['ate_rmse_m']:.3f} m, scale drift {tr['scale_drift_percent']:.2f} %, "
+      f"map median {m.get('median_m', float('nan')):.3f} m")
+PY
