@@ -128,6 +128,9 @@ void RegisterMapCommand(CLI::App& app) {
   cmd->add_option("--keyframes-per-submap", args->options.submap.keyframes_per_submap,
                   "Keyframes at which a submap is completed")
       ->capture_default_str();
+  cmd->add_option("--feature-workers", args->options.feature_workers,
+                  "Frames whose SIFT features are extracted in parallel")
+      ->capture_default_str();
   cmd->add_option("--max-features", args->options.sift.max_features, "SIFT features per frame")
       ->capture_default_str();
   cmd->callback([args] { RunMap(*args); });

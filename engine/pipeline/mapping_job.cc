@@ -6,6 +6,7 @@
 #include <fstream>
 #include <mutex>
 #include <thread>
+#include <vector>
 
 #include <fmt/format.h>
 
@@ -56,29 +57,47 @@ void WriteJson(const std::filesystem::path& path, const nlohmann::json& json) {
   if (!out) throw EnvironmentError(fmt::format("cannot write {}", path.string()));
 }
 
-// The decoder side: owns the frame source and the SIFT extractor, runs on its own thread.
+// The decoder side: owns the frame source and one SIFT extractor per feature worker, runs on
+// its own thread. Frames are decoded in batches of `workers` and their features extracted in
+// parallel, then pushed in input order.
 class DecoderWorker {
  public:
-  DecoderWorker(FrameSource& source, const SiftOptions& sift, BoundedQueue<FrameFeatures>& queue,
-                CancellationToken cancel, const std::atomic<bool>& stop, std::size_t min_features)
+  DecoderWorker(FrameSource& source, const SiftOptions& sift, int workers,
+                BoundedQueue<FrameFeatures>& queue, CancellationToken cancel,
+                const std::atomic<bool>& stop, std::size_t min_features)
       : source_(source),
-        extractor_(sift),
         queue_(queue),
         cancel_(std::move(cancel)),
         stop_(stop),
-        min_features_(min_features) {}
+        min_features_(min_features) {
+    // Separate extractors (not copies sharing one cv::SIFT) so workers share no state.
+    for (int i = 0; i < workers; ++i) extractors_.emplace_back(sift);
+  }
 
   void Run() {
     try {
-      while (!cancel_.IsCancelled() && !stop_.load()) {
+      bool more = true;
+      while (more && !cancel_.IsCancelled() && !stop_.load()) {
         const auto start = Clock::now();
-        std::optional<Frame> frame = source_.Next();
-        if (!frame) break;
-        FrameFeatures item{frame->index, frame->timestamp_s, extractor_.Extract(frame->bgr)};
+        std::vector<Frame> batch;
+        while (batch.size() < extractors_.size()) {
+          std::optional<Frame> frame = source_.Next();
+          if (!frame) {
+            more = false;
+            break;
+          }
+          batch.push_back(std::move(*frame));
+        }
+        std::vector<FrameFeatures> items = ExtractBatch(batch);
         busy_seconds_ += Seconds(start);
-        ++frames_;
-        if (item.features.size() < min_features_) ++frames_without_features_;
-        if (!queue_.Push(std::move(item))) break;  // consumer closed the queue
+        for (FrameFeatures& item : items) {
+          ++frames_;
+          if (item.features.size() < min_features_) ++frames_without_features_;
+          if (!queue_.Push(std::move(item))) {  // consumer closed the queue
+            more = false;
+            break;
+          }
+        }
       }
     } catch (...) {
       error_ = std::current_exception();
@@ -87,13 +106,38 @@ class DecoderWorker {
   }
 
   std::exception_ptr error() const { return error_; }
+
+ private:
+  // Frame i goes to extractor i; all but the first on helper threads. Joins every thread
+  // before rethrowing the first error, so no thread outlives a failure.
+  std::vector<FrameFeatures> ExtractBatch(const std::vector<Frame>& batch) {
+    std::vector<FrameFeatures> items(batch.size());
+    std::vector<std::exception_ptr> errors(batch.size());
+    auto extract = [&](std::size_t i) {
+      try {
+        items[i] = {batch[i].index, batch[i].timestamp_s, extractors_[i].Extract(batch[i].bgr)};
+      } catch (...) {
+        errors[i] = std::current_exception();
+      }
+    };
+    std::vector<std::thread> helpers;
+    for (std::size_t i = 1; i < batch.size(); ++i) helpers.emplace_back(extract, i);
+    if (!batch.empty()) extract(0);
+    for (std::thread& t : helpers) t.join();
+    for (const std::exception_ptr& e : errors) {
+      if (e) std::rethrow_exception(e);
+    }
+    return items;
+  }
+
+ public:
   double busy_seconds() const { return busy_seconds_; }
   std::int64_t frames() const { return frames_; }
   std::int64_t frames_without_features() const { return frames_without_features_; }
 
  private:
   FrameSource& source_;
-  SiftExtractor extractor_;
+  std::vector<SiftExtractor> extractors_;
   BoundedQueue<FrameFeatures>& queue_;
   CancellationToken cancel_;
   const std::atomic<bool>& stop_;
@@ -207,7 +251,7 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   BoundedQueue<FrameFeatures> queue(options.queue_capacity);
   std::atomic<bool> stop{false};
   const int min_features = options.submap.min_tracking_inliers;
-  DecoderWorker worker(*source, options.sift, queue, cancel, stop,
+  DecoderWorker worker(*source, options.sift, options.feature_workers, queue, cancel, stop,
                        static_cast<std::size_t>(min_features));
   std::thread decoder([&worker] { worker.Run(); });
 

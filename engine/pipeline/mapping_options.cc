@@ -19,6 +19,7 @@ void MappingOptions::Check() const {
   if (focal_px) CheckGreater("MappingOptions.focal_px", *focal_px, 0.0);
   CheckInRange("MappingOptions.default_focal_factor", default_focal_factor, 0.05, 20.0);
   CheckGreater("MappingOptions.queue_capacity", queue_capacity, std::size_t{0});
+  CheckInRange("MappingOptions.feature_workers", feature_workers, 1, 16);
 }
 
 Intrinsics ResolveIntrinsics(const MappingOptions& options, const FrameSourceInfo& info) {
