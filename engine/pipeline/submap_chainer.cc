@@ -9,6 +9,7 @@
 #include "engine/core/options.h"
 #include "engine/features/feature_matcher.h"
 #include "engine/geometry/similarity_ransac.h"
+#include "engine/submap/frame_record.h"
 
 namespace glam {
 
@@ -40,16 +41,6 @@ double SubmapScale(const Submap& submap) {
   return *mid > 0 && std::isfinite(*mid) ? *mid : 1.0;
 }
 
-cv::Mat LandmarkDescriptors(const Submap& submap) {
-  cv::Mat out(static_cast<int>(submap.landmarks.size()), kDescriptorSize, CV_32F);
-  for (int i = 0; i < out.rows; ++i) {
-    const Descriptor& d = submap.landmarks[static_cast<std::size_t>(i)].descriptor;
-    float* row = out.ptr<float>(i);
-    for (int j = 0; j < kDescriptorSize; ++j) row[j] = static_cast<float>(d[static_cast<std::size_t>(j)]) / 512.0f;
-  }
-  return out;
-}
-
 ChainResult LinkSubmaps(const Submap& previous, const Submap& next, const ChainingOptions& options) {
   ChainResult out;
   if (previous.landmarks.size() < 3 || next.landmarks.size() < 3) return out;
@@ -57,7 +48,8 @@ ChainResult LinkSubmaps(const Submap& previous, const Submap& next, const Chaini
   match_options.ratio = options.match_ratio;
   match_options.mutual = options.mutual;
   const std::vector<Match> matches =
-      MatchDescriptors(LandmarkDescriptors(next), LandmarkDescriptors(previous), match_options);
+      MatchDescriptors(LandmarkDescriptorMatrix(next.landmarks),
+                       LandmarkDescriptorMatrix(previous.landmarks), match_options);
   out.matches = static_cast<int>(matches.size());
   std::vector<PointCorrespondence> data;
   data.reserve(matches.size());

@@ -11,7 +11,6 @@
 #include <vector>
 
 #include <Eigen/Core>
-#include <opencv2/core.hpp>
 
 #include "engine/core/sim3.h"
 #include "engine/map/submap.h"
@@ -42,9 +41,6 @@ struct ChainResult {
 
 // Median over landmarks of the distance to the nearest keyframe centre; 1 if undefined.
 double SubmapScale(const Submap& submap);
-
-// Landmark descriptors as CV_32F rows (byte / 512, the inverse of the builder's quantisation).
-cv::Mat LandmarkDescriptors(const Submap& submap);
 
 // Matches the two submaps' landmarks and verifies them with Sim3 RANSAC (the project's RANSAC
 // template with the similarity estimator of engine/geometry).

@@ -17,6 +17,24 @@ void DequantizeDescriptor(const Descriptor& d, float* row) {
   for (int i = 0; i < kDescriptorSize; ++i) row[i] = static_cast<float>(d[i]) / 512.0f;
 }
 
+cv::Mat LandmarkDescriptorMatrix(const std::vector<Landmark>& landmarks) {
+  cv::Mat out(static_cast<int>(landmarks.size()), kDescriptorSize, CV_32F);
+  for (int r = 0; r < out.rows; ++r) DequantizeDescriptor(landmarks[r].descriptor, out.ptr<float>(r));
+  return out;
+}
+
+cv::Mat LandmarkDescriptorMatrix(const std::vector<Landmark>& landmarks, const std::vector<int>& rows) {
+  cv::Mat out(static_cast<int>(rows.size()), kDescriptorSize, CV_32F);
+  for (int r = 0; r < out.rows; ++r) DequantizeDescriptor(landmarks[rows[r]].descriptor, out.ptr<float>(r));
+  return out;
+}
+
+std::vector<Eigen::Vector2d> CompactFeatures::PixelPoints() const {
+  std::vector<Eigen::Vector2d> out(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) out[i] = points[i].cast<double>();
+  return out;
+}
+
 CompactFeatures CompactFeatures::From(const Features& features) {
   CompactFeatures c;
   c.points.reserve(features.size());

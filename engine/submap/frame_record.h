@@ -28,11 +28,17 @@ struct CompactFeatures {
   // N x 128 CV_32F, the inverse of the quantisation in From() (to within 1/512).
   cv::Mat FloatDescriptors() const;
   cv::Mat FloatDescriptors(const std::vector<int>& rows) const;
+  // Keypoint positions in double precision (what FeatureGrid takes).
+  std::vector<Eigen::Vector2d> PixelPoints() const;
 };
 
 // Quantises one RootSIFT/SIFT float row (unit L2 norm) to bytes: min(255, round(512 v)).
 Descriptor QuantizeDescriptor(const float* row);
 void DequantizeDescriptor(const Descriptor& d, float* row);
+
+// Landmark descriptors as CV_32F rows for matching: all landmarks, or those at `rows`.
+cv::Mat LandmarkDescriptorMatrix(const std::vector<Landmark>& landmarks);
+cv::Mat LandmarkDescriptorMatrix(const std::vector<Landmark>& landmarks, const std::vector<int>& rows);
 
 struct FrameRecord {
   std::int64_t index = 0;

@@ -31,10 +31,9 @@ void SubmapBuilder::AddKeyframe(std::size_t position) {
   open_.keyframes.push_back(kf);
   open_.keyframe_frame_positions.push_back(position);
   for (const auto& [feature, landmark_id] : frame.landmark_matches) {
-    auto it = std::lower_bound(open_.landmarks.begin(), open_.landmarks.end(), landmark_id,
-                               [](const Landmark& lm, std::uint32_t v) { return lm.id < v; });
-    if (it == open_.landmarks.end() || it->id != landmark_id) continue;  // filtered meanwhile
-    it->observations.push_back({keyframe_index, frame.features.points[feature]});
+    Landmark* landmark = FindLandmark(landmark_id);
+    if (landmark == nullptr) continue;  // filtered meanwhile
+    landmark->observations.push_back({keyframe_index, frame.features.points[feature]});
   }
   ++stats_.keyframes;
 }
@@ -74,8 +73,7 @@ void SubmapBuilder::ObserveNewLandmarksInEarlierKeyframes(std::size_t first_new)
   const double radius = options_.max_new_point_reprojection_pixels * 2.0;
   std::vector<int> rows;
   for (std::size_t i = first_new; i < open_.landmarks.size(); ++i) rows.push_back(static_cast<int>(i));
-  cv::Mat descriptors(static_cast<int>(rows.size()), kDescriptorSize, CV_32F);
-  for (int r = 0; r < descriptors.rows; ++r) DequantizeDescriptor(open_.landmarks[rows[r]].descriptor, descriptors.ptr<float>(r));
+  const cv::Mat descriptors = LandmarkDescriptorMatrix(open_.landmarks, rows);
   const std::size_t newest_two = open_.keyframes.size() - 2;  // middle and current observe them
   std::size_t added = 0;
   for (std::size_t k = 0; k < newest_two; ++k) {
@@ -91,9 +89,7 @@ void SubmapBuilder::ObserveNewLandmarksInEarlierKeyframes(std::size_t first_new)
       }
     }
     if (!any) continue;
-    std::vector<Eigen::Vector2d> points(frame.features.points.size());
-    for (std::size_t i = 0; i < points.size(); ++i) points[i] = frame.features.points[i].cast<double>();
-    const FeatureGrid grid(points, camera.intrinsics().width, camera.intrinsics().height, radius);
+    const FeatureGrid grid(frame.features.PixelPoints(), camera.intrinsics().width, camera.intrinsics().height, radius);
     GuidedMatchOptions guided;
     guided.radius_px = radius;
     guided.ratio = static_cast<float>(options_.match_ratio);
@@ -175,8 +171,7 @@ std::size_t SubmapBuilder::TriangulateBetween(std::size_t first_position, std::s
   if (!open_.landmarks.empty()) {
     std::vector<int> candidate_rows;
     for (const NewPoint& c : candidates) candidate_rows.push_back(c.feature_first);
-    cv::Mat existing(static_cast<int>(open_.landmarks.size()), kDescriptorSize, CV_32F);
-    for (int r = 0; r < existing.rows; ++r) DequantizeDescriptor(open_.landmarks[r].descriptor, existing.ptr<float>(r));
+    const cv::Mat existing = LandmarkDescriptorMatrix(open_.landmarks);
     MatchOptions dup_options;
     dup_options.ratio = static_cast<float>(options_.match_ratio);
     for (const Match& m : MatchDescriptors(first.features.FloatDescriptors(candidate_rows), existing, dup_options)) {

@@ -1,6 +1,7 @@
 #include "engine/submap/submap_builder.h"
 
 #include <algorithm>
+#include <utility>
 #include <cmath>
 
 #include "engine/core/logging.h"
@@ -31,6 +32,10 @@ const Landmark* SubmapBuilder::FindLandmark(std::uint32_t id) const {
   auto it = std::lower_bound(open_.landmarks.begin(), open_.landmarks.end(), id,
                              [](const Landmark& lm, std::uint32_t v) { return lm.id < v; });
   return (it != open_.landmarks.end() && it->id == id) ? &*it : nullptr;
+}
+
+Landmark* SubmapBuilder::FindLandmark(std::uint32_t id) {
+  return const_cast<Landmark*>(std::as_const(*this).FindLandmark(id));
 }
 
 std::vector<Submap> SubmapBuilder::AddFrame(std::int64_t index, double timestamp_s,

@@ -105,6 +105,7 @@ class SubmapBuilder {
 
   Camera CurrentCamera() const;
   const Landmark* FindLandmark(std::uint32_t id) const;
+  Landmark* FindLandmark(std::uint32_t id);
 
   Intrinsics intrinsics_;
   SubmapOptions options_;

@@ -64,24 +64,16 @@ bool SubmapBuilder::Localise(FrameRecord& record, const std::optional<SE3>& pred
       projections.push_back(px);
     }
     if (static_cast<int>(candidate_landmarks.size()) < options_.min_tracking_inliers) return false;
-    cv::Mat landmark_descriptors(static_cast<int>(candidate_landmarks.size()), kDescriptorSize, CV_32F);
-    for (int r = 0; r < landmark_descriptors.rows; ++r) {
-      DequantizeDescriptor(open_.landmarks[candidate_landmarks[r]].descriptor, landmark_descriptors.ptr<float>(r));
-    }
+    const cv::Mat landmark_descriptors = LandmarkDescriptorMatrix(open_.landmarks, candidate_landmarks);
     const double diagonal = std::hypot(camera.intrinsics().width, camera.intrinsics().height);
     GuidedMatchOptions guided;
     guided.radius_px = options_.match_radius_fraction * diagonal;
     guided.ratio = static_cast<float>(options_.match_ratio);
-    std::vector<Eigen::Vector2d> points(record.features.points.size());
-    for (std::size_t i = 0; i < points.size(); ++i) points[i] = record.features.points[i].cast<double>();
-    const FeatureGrid grid(points, camera.intrinsics().width, camera.intrinsics().height, guided.radius_px);
+    const FeatureGrid grid(record.features.PixelPoints(), camera.intrinsics().width, camera.intrinsics().height, guided.radius_px);
     matches = MatchGuided(landmark_descriptors, projections, frame_descriptors, grid, guided);
   } else {
-    cv::Mat landmark_descriptors(static_cast<int>(open_.landmarks.size()), kDescriptorSize, CV_32F);
-    for (int r = 0; r < landmark_descriptors.rows; ++r) {
-      candidate_landmarks.push_back(r);
-      DequantizeDescriptor(open_.landmarks[r].descriptor, landmark_descriptors.ptr<float>(r));
-    }
+    const cv::Mat landmark_descriptors = LandmarkDescriptorMatrix(open_.landmarks);
+    for (int r = 0; r < landmark_descriptors.rows; ++r) candidate_landmarks.push_back(r);
     MatchOptions global;
     global.ratio = static_cast<float>(options_.match_ratio);
     global.mutual = true;
