@@ -10,5 +10,7 @@ namespace glam::cli {
 void RegisterEvalCommand(CLI::App& app);
 void RegisterSynthCommand(CLI::App& app);
 void RegisterMapCommand(CLI::App& app);
+void RegisterVocabCommand(CLI::App& app);
+void RegisterServeCommand(CLI::App& app);
 
 }  // namespace glam::cli

@@ -2,7 +2,8 @@
 //   synth   render a synthetic aerial video with ground truth
 //   eval    evaluate a trajectory / point cloud against ground truth
 //   map     build submaps, trajectory and point cloud from a video or image folder
-// (serve and vocab arrive with their engine parts.)
+//   vocab   train the vocabulary tree used to find overlapping submaps
+//   serve   the mapping server (REST API, job queue, web viewer)
 #include <cstdlib>
 #include <exception>
 #include <iostream>
@@ -38,6 +39,8 @@ int main(int argc, char** argv) {
   glam::cli::RegisterEvalCommand(app);
   glam::cli::RegisterSynthCommand(app);
   glam::cli::RegisterMapCommand(app);
+  glam::cli::RegisterVocabCommand(app);
+  glam::cli::RegisterServeCommand(app);
 
   try {
     app.parse(argc, argv);

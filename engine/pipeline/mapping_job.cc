@@ -269,6 +269,9 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
                       ? std::max<double>(0, static_cast<double>(state.frames_total - state.frames_done) / state.fps)
                       : -1;
     state.submaps_completed = static_cast<std::int64_t>(assembler.nodes().size());
+    // Until global alignment exists every placed submap is one new map revision.
+    state.submaps_aligned = state.submaps_completed - assembler.disconnected();
+    state.revision = state.submaps_completed;
     state.keyframes = builder.stats().keyframes;
     state.points = assembler.points();
     progress(state);

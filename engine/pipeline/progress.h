@@ -17,8 +17,12 @@ struct MappingProgress {
   double fps = 0;                // frames_done / elapsed wall time
   double eta_s = -1;             // -1 when unknown
   std::int64_t submaps_completed = 0;
+  std::int64_t submaps_aligned = 0;  // submaps placed in the world frame by alignment
   std::int64_t keyframes = 0;
   std::int64_t points = 0;
+  // Grows with every published map revision (docs/architecture.md, "Map revision"); 0 before
+  // the first submap is placed.
+  std::int64_t revision = 0;
 };
 
 // Called on the thread that runs RunMapping, at most a few times per second plus once at the

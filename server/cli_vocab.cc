@@ -1,0 +1,8 @@
+// Placeholder: the owner of this command replaces this file.
+#include "server/commands.h"
+
+namespace glam::cli {
+
+void RegisterVocabCommand(CLI::App& /*app*/) {}
+
+}  // namespace glam::cli
