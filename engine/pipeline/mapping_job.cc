@@ -286,6 +286,7 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
       GLAM_LOG_INFO("submap {} completed: frames {}-{}, {} keyframes, {} landmarks", submap.id,
                     submap.first_frame, submap.last_frame, submap.keyframes.size(),
                     submap.landmarks.size());
+      emit(true);  // every completed submap is reported (the server turns it into an event)
     }
   };
 

@@ -35,6 +35,10 @@ struct MappingOptions {
   // on every frame is the cost that bounds throughput (~270 ms per 720p frame on one core),
   // so on 2 cores two workers nearly double the frame rate; the submap builder needs ~10 %.
   int feature_workers = 2;
+  // Continue an interrupted run in the same out_dir: submaps already persisted there are
+  // reloaded and decoding restarts at the first frame the next submap needs, instead of
+  // mapping the whole input again (a server restart after a crash uses this).
+  bool resume = false;
 
   void Check() const;  // throws InputError
 };
