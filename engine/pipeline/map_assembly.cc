@@ -18,7 +18,7 @@ SE3 WorldFromCam(const Sim3& world_from_submap, const SE3& cam_from_submap) {
              world_from_submap * submap_from_cam.translation());
 }
 
-MapAssembler::MapAssembler(const ChainingOptions& chaining, const LevelingOptions& leveling)
+MapAssembler::MapAssembler(const VerificationOptions& chaining, const LevelingOptions& leveling)
     : chaining_(chaining), leveling_(leveling) {}
 
 void MapAssembler::Add(const Submap& submap) {
@@ -34,10 +34,10 @@ void MapAssembler::Add(const Submap& submap) {
     GLAM_LOG_INFO("world frame = submap {} levelled ({} ground-plane inliers of {} landmarks)",
                   submap.id, level.plane_inliers, submap.landmarks.size());
   } else {
-    const ChainResult link = LinkSubmaps(*previous_, submap, chaining_);
+    const PairVerification link = VerifySubmapPair(*previous_, submap, chaining_);
     const Sim3& world_from_prev = nodes_.back().world_from_submap;
-    if (link.linked) {
-      node.world_from_submap = world_from_prev * link.prev_from_new;
+    if (link.verified) {
+      node.world_from_submap = world_from_prev * link.reference_from_query;
       edges_.push_back({previous_->id, submap.id, link.matches, link.inliers});
     } else {
       node.world_from_submap = world_from_prev;

@@ -15,8 +15,8 @@
 #include "engine/core/sim3.h"
 #include "engine/export/ply_points.h"
 #include "engine/map/submap.h"
-#include "engine/pipeline/submap_chainer.h"
-#include "engine/pipeline/world_leveling.h"
+#include "engine/alignment/submap_verifier.h"
+#include "engine/alignment/world_leveling.h"
 
 namespace glam {
 
@@ -43,7 +43,7 @@ struct SubmapEdge {
 
 class MapAssembler {
  public:
-  MapAssembler(const ChainingOptions& chaining, const LevelingOptions& leveling);
+  MapAssembler(const VerificationOptions& chaining, const LevelingOptions& leveling);
 
   // Places `submap` (after the previous one) and records its frames and points.
   void Add(const Submap& submap);
@@ -62,7 +62,7 @@ class MapAssembler {
   void WriteGraph(const std::filesystem::path& path) const;
 
  private:
-  ChainingOptions chaining_;
+  VerificationOptions chaining_;
   LevelingOptions leveling_;
   std::optional<Submap> previous_;  // landmarks of the last submap, for the next link
   std::vector<SubmapNode> nodes_;

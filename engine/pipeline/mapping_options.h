@@ -9,8 +9,8 @@
 
 #include "engine/core/camera.h"
 #include "engine/features/sift_extractor.h"
-#include "engine/pipeline/submap_chainer.h"
-#include "engine/pipeline/world_leveling.h"
+#include "engine/alignment/submap_verifier.h"
+#include "engine/alignment/world_leveling.h"
 #include "engine/submap/submap_options.h"
 #include "engine/video/frame_source.h"
 
@@ -20,7 +20,7 @@ struct MappingOptions {
   FrameSourceOptions source;
   SiftOptions sift;
   SubmapOptions submap;
-  ChainingOptions chaining;
+  VerificationOptions chaining;
   LevelingOptions leveling;
   // Full calibration at original resolution (e.g. from --intrinsics file.json).
   std::optional<Intrinsics> intrinsics;

@@ -43,7 +43,7 @@ Submap FrameOnlySubmap(std::uint32_t id, std::int64_t first, std::int64_t last, 
 }
 
 TEST(MapAssembly, OverlapFramesComeFromTheEarlierSubmapAndUnlinkableIsDisconnected) {
-  MapAssembler assembler(ChainingOptions{}, LevelingOptions{});
+  MapAssembler assembler(VerificationOptions{}, LevelingOptions{});
   assembler.Add(FrameOnlySubmap(0, 0, 9, 1.0));   // no landmarks: identity world frame
   assembler.Add(FrameOnlySubmap(1, 8, 15, 2.0));  // cannot be linked (no landmarks)
   ASSERT_EQ(assembler.nodes().size(), 2u);

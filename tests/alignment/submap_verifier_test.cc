@@ -1,6 +1,7 @@
-// Chaining must recover the similarity between two submaps from their shared landmarks, even
-// with a large fraction of wrong descriptor matches (repeated texture in aerial footage).
-#include "engine/pipeline/submap_chainer.h"
+// Verification must recover the similarity between two submaps from their shared landmarks,
+// even with a large fraction of wrong descriptor matches (repeated texture in aerial footage),
+// and must reject pairs that share nothing.
+#include "engine/alignment/submap_verifier.h"
 
 #include <random>
 
@@ -38,10 +39,11 @@ struct SyntheticPair {
 
 // Ground points at z in [-2, 2] under cameras at height 100 (previous submap units); the
 // next submap sees the last part of the same ground in its own frame (prev_from_new^-1).
-SyntheticPair MakePair(double wrong_fraction, unsigned seed) {
+SyntheticPair MakePair(double wrong_fraction, unsigned seed, int shared = 200,
+                       double noise_per_axis = 0.1) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u(0.0, 1.0);
-  std::normal_distribution<double> noise(0.0, 0.1);  // 0.1 % of the height
+  std::normal_distribution<double> noise(0.0, noise_per_axis);  // height is 100
   SyntheticPair pair;
   pair.prev_from_new = Sim3(2.5, SO3::Exp(Eigen::Vector3d(0.2, -0.3, 1.1)), Eigen::Vector3d(40, -7, 3));
   const Sim3 new_from_prev = pair.prev_from_new.Inverse();
@@ -53,7 +55,7 @@ SyntheticPair MakePair(double wrong_fraction, unsigned seed) {
     pair.next.keyframes.back().cam_from_submap =
         SE3(pair.next.keyframes.back().cam_from_submap.rotation(), Eigen::Vector3d::Zero());
   }
-  const int own = 300, shared = 200;
+  const int own = 300;
   for (int i = 0; i < own + shared; ++i) {
     Landmark lm;
     lm.id = static_cast<std::uint32_t>(i);
@@ -61,7 +63,7 @@ SyntheticPair MakePair(double wrong_fraction, unsigned seed) {
     lm.descriptor = RandomDescriptor(rng);
     pair.previous.landmarks.push_back(lm);
   }
-  // Shared landmarks: the previous submap's last 200, seen again with noise in the new frame.
+  // Shared landmarks: the previous submap's last `shared`, seen again with noise in the new frame.
   std::vector<Eigen::Vector3d> shared_points;
   for (int i = own; i < own + shared; ++i) shared_points.push_back(pair.previous.landmarks[i].point_in_submap);
   // Wrong matches: the first wrong_fraction of them get another shared point's position.
@@ -93,24 +95,24 @@ SyntheticPair MakePair(double wrong_fraction, unsigned seed) {
   return pair;
 }
 
-TEST(SubmapChainer, SubmapScaleIsTheFlyingHeight) {
+TEST(SubmapVerifier, DepthScaleIsTheFlyingHeight) {
   const SyntheticPair pair = MakePair(0.0, 3);
   // Ground spreads 50 units sideways of the flight line: nearest-camera distances are
   // sqrt(100^2 + d^2) with a median a little above the height.
-  EXPECT_GE(SubmapScale(pair.previous), 100.0);
-  EXPECT_LE(SubmapScale(pair.previous), 115.0);
+  EXPECT_GE(SubmapDepthScale(pair.previous), 100.0);
+  EXPECT_LE(SubmapDepthScale(pair.previous), 115.0);
 }
 
-TEST(SubmapChainer, RecoversKnownSim3With30PercentWrongMatches) {
+TEST(SubmapVerifier, RecoversKnownSim3With30PercentWrongMatches) {
   for (unsigned seed : {1u, 2u, 3u}) {
     const SyntheticPair pair = MakePair(0.3, seed);
-    const ChainResult result = LinkSubmaps(pair.previous, pair.next);
-    ASSERT_TRUE(result.linked) << "seed " << seed;
+    const PairVerification result = VerifySubmapPair(pair.previous, pair.next);
+    ASSERT_TRUE(result.verified) << "seed " << seed;
     EXPECT_GE(result.matches, 190);
     // 140 correct matches; a wrong one may land within the threshold by chance.
     EXPECT_GE(result.inliers, 130);
     EXPECT_LE(result.inliers, 150);
-    const Sim3& est = result.prev_from_new;
+    const Sim3& est = result.reference_from_query;
     EXPECT_NEAR(est.scale() / pair.prev_from_new.scale(), 1.0, 2e-3);
     const double angle = (est.rotation() * pair.prev_from_new.rotation().Inverse()).Log().norm();
     EXPECT_LT(angle, 2e-3);
@@ -120,12 +122,36 @@ TEST(SubmapChainer, RecoversKnownSim3With30PercentWrongMatches) {
   }
 }
 
-TEST(SubmapChainer, UnrelatedSubmapsAreNotLinked) {
+// The acceptance bound: landmarks with 1 % noise (RMS error 1 % of the flying height)
+// and half of the correspondences wrong still give the similarity within 0.1 degrees and
+// 0.1 % scale.
+TEST(SubmapVerifier, OnePercentNoiseAndHalfWrongMatchesWithinTenthDegreeAndTenthPercent) {
+  const double per_axis = 1.0 / std::sqrt(3.0);  // RMS norm 1 = 1 % of the height 100
+  for (unsigned seed : {4u, 5u}) {
+    const SyntheticPair pair = MakePair(0.5, seed, 2000, per_axis);
+    const PairVerification result = VerifySubmapPair(pair.previous, pair.next);
+    ASSERT_TRUE(result.verified) << "seed " << seed;
+    EXPECT_GE(result.inliers, 900);
+    const Sim3& est = result.reference_from_query;
+    EXPECT_LT(std::abs(est.scale() / pair.prev_from_new.scale() - 1.0), 1e-3) << "seed " << seed;
+    const double angle_deg =
+        (est.rotation() * pair.prev_from_new.rotation().Inverse()).Log().norm() * 180.0 / M_PI;
+    EXPECT_LT(angle_deg, 0.1) << "seed " << seed;
+    // Inlier pairs name landmarks of the right submaps and carry their positions.
+    ASSERT_EQ(result.inlier_pairs.size(), static_cast<std::size_t>(result.inliers));
+    for (const LandmarkPair& p : result.inlier_pairs) {
+      ASSERT_LT(p.query_landmark, pair.next.landmarks.size());
+      EXPECT_EQ(pair.next.landmarks[p.query_landmark].point_in_submap, p.point_in_query);
+    }
+  }
+}
+
+TEST(SubmapVerifier, UnrelatedSubmapsAreRejected) {
   SyntheticPair pair = MakePair(0.0, 5);
   std::mt19937 rng(11);
   for (Landmark& lm : pair.next.landmarks) lm.descriptor = RandomDescriptor(rng);
-  const ChainResult result = LinkSubmaps(pair.previous, pair.next);
-  EXPECT_FALSE(result.linked);
+  const PairVerification result = VerifySubmapPair(pair.previous, pair.next);
+  EXPECT_FALSE(result.verified);
 }
 
 }  // namespace

@@ -1,6 +1,6 @@
 // Levelling must make a tilted ground plane horizontal (z = 0) with the cameras above it,
 // whatever the first submap's arbitrary orientation, and ignore off-plane structure.
-#include "engine/pipeline/world_leveling.h"
+#include "engine/alignment/world_leveling.h"
 
 #include <random>
 

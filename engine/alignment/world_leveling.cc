@@ -1,4 +1,4 @@
-#include "engine/pipeline/world_leveling.h"
+#include "engine/alignment/world_leveling.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,0 +1,92 @@
+#include "engine/alignment/submap_verifier.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "engine/core/error.h"
+#include "engine/core/logging.h"
+#include "engine/core/options.h"
+#include "engine/features/feature_matcher.h"
+#include "engine/geometry/similarity_ransac.h"
+#include "engine/submap/frame_record.h"
+
+namespace glam {
+
+void VerificationOptions::Check() const {
+  CheckInRange("VerificationOptions.match_ratio", match_ratio, 0.1f, 1.0f);
+  CheckInRange("VerificationOptions.inlier_threshold_fraction", inlier_threshold_fraction, 1e-5, 1.0);
+  CheckGreaterEqual("VerificationOptions.min_inliers", min_inliers, 3);
+  CheckInRange("VerificationOptions.min_inlier_ratio", min_inlier_ratio, 0.0, 1.0);
+  CheckGreater("VerificationOptions.max_iterations", max_iterations, 0);
+  CheckInRange("VerificationOptions.confidence", confidence, 0.5, 0.999999);
+}
+
+double SubmapDepthScale(const Submap& submap) {
+  if (submap.keyframes.empty() || submap.landmarks.empty()) return 1.0;
+  std::vector<Eigen::Vector3d> centres;
+  centres.reserve(submap.keyframes.size());
+  for (const Keyframe& kf : submap.keyframes) {
+    centres.push_back(kf.cam_from_submap.Inverse().translation());
+  }
+  std::vector<double> distances;
+  distances.reserve(submap.landmarks.size());
+  for (const Landmark& lm : submap.landmarks) {
+    double best = std::numeric_limits<double>::infinity();
+    for (const Eigen::Vector3d& c : centres) best = std::min(best, (lm.point_in_submap - c).norm());
+    distances.push_back(best);
+  }
+  auto mid = distances.begin() + static_cast<std::ptrdiff_t>(distances.size() / 2);
+  std::nth_element(distances.begin(), mid, distances.end());
+  return *mid > 0 && std::isfinite(*mid) ? *mid : 1.0;
+}
+
+PairVerification VerifySubmapPair(const Submap& reference, const Submap& query,
+                                  const VerificationOptions& options) {
+  PairVerification out;
+  if (reference.landmarks.size() < 3 || query.landmarks.size() < 3) return out;
+  MatchOptions match_options;
+  match_options.ratio = options.match_ratio;
+  match_options.mutual = options.mutual;
+  const std::vector<Match> matches =
+      MatchDescriptors(LandmarkDescriptorMatrix(query.landmarks),
+                       LandmarkDescriptorMatrix(reference.landmarks), match_options);
+  out.matches = static_cast<int>(matches.size());
+  std::vector<PointCorrespondence> data;
+  data.reserve(matches.size());
+  for (const Match& m : matches) {
+    data.push_back({query.landmarks[static_cast<std::size_t>(m.query)].point_in_submap,
+                    reference.landmarks[static_cast<std::size_t>(m.train)].point_in_submap});
+  }
+  const double threshold = options.inlier_threshold_fraction * SubmapDepthScale(reference);
+  RansacOptions ransac_options;
+  ransac_options.inlier_threshold = threshold;
+  ransac_options.max_iterations = options.max_iterations;
+  ransac_options.confidence = options.confidence;
+  ransac_options.seed = options.seed;
+  const RansacResult<Sim3> ransac = EstimateSimilarity(data, ransac_options);
+  out.inliers = ransac.num_inliers;
+  double sum_sq = 0;
+  for (std::size_t i = 0; i < data.size(); ++i) {
+    if (ransac.inlier_mask[i]) sum_sq += (ransac.model * data[i].source - data[i].target).squaredNorm();
+  }
+  out.inlier_rmse = out.inliers > 0 ? std::sqrt(sum_sq / out.inliers) : 0.0;
+  out.verified = ransac.success && out.inliers >= options.min_inliers &&
+                 out.inliers >= options.min_inlier_ratio * out.matches;
+  if (out.verified) {
+    out.reference_from_query = ransac.model;
+    out.inlier_pairs.reserve(static_cast<std::size_t>(out.inliers));
+    for (std::size_t i = 0; i < data.size(); ++i) {
+      if (!ransac.inlier_mask[i]) continue;
+      const Landmark& r = reference.landmarks[static_cast<std::size_t>(matches[i].train)];
+      const Landmark& q = query.landmarks[static_cast<std::size_t>(matches[i].query)];
+      out.inlier_pairs.push_back({r.id, q.id, r.point_in_submap, q.point_in_submap});
+    }
+  }
+  GLAM_LOG_DEBUG("verify submap {} against {}: {} matches, {} inliers, rmse {:.4g} (threshold {:.4g}){}",
+                 query.id, reference.id, out.matches, out.inliers, out.inlier_rmse, threshold,
+                 out.verified ? "" : ": rejected");
+  return out;
+}
+
+}  // namespace glam

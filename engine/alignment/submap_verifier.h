@@ -1,0 +1,62 @@
+// Verification of a candidate pair of submaps (paper, "Global Submap Alignment"): landmarks
+// are matched by descriptor and the similarity reference_from_query is found by Sim3 RANSAC
+// (closed-form Umeyama on 3-point samples, the project's one RANSAC template) on the 3D-3D
+// correspondences; the pair is accepted only with enough inliers AND a high enough inlier
+// ratio, and only the inlier correspondences go on to the factor graph.
+//
+// Used for both kinds of edges: temporal neighbours (the next submap starts inside the
+// previous one's last 10 % of frames, so both triangulated the same ground) and candidates
+// retrieved by the vocabulary tree (loop closures, re-localisation after a tracking loss).
+// Submap units are arbitrary (monocular), so the inlier threshold is a fraction of the
+// reference submap's own depth scale (median distance of its landmarks to the nearest
+// keyframe centre, i.e. roughly the flying height in submap units).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "engine/core/sim3.h"
+#include "engine/map/submap.h"
+
+namespace glam {
+
+struct VerificationOptions {
+  float match_ratio = 0.8f;        // Lowe's ratio test on landmark descriptors
+  bool mutual = true;              // cross-checked matches only
+  // RANSAC inlier threshold = this x SubmapDepthScale(reference).
+  double inlier_threshold_fraction = 0.02;
+  int min_inliers = 15;            // fewer -> the pair is rejected
+  double min_inlier_ratio = 0.2;   // inliers / matches below this -> rejected
+  int max_iterations = 1000;
+  double confidence = 0.999;
+  unsigned seed = 1;
+
+  void Check() const;  // throws InputError
+};
+
+// One inlier correspondence: the same ground point as a landmark of each submap.
+struct LandmarkPair {
+  std::uint32_t reference_landmark = 0;  // Landmark::id in the reference submap
+  std::uint32_t query_landmark = 0;      // Landmark::id in the query submap
+  Eigen::Vector3d point_in_reference{0, 0, 0};
+  Eigen::Vector3d point_in_query{0, 0, 0};
+};
+
+struct PairVerification {
+  bool verified = false;
+  Sim3 reference_from_query;  // identity when !verified
+  int matches = 0;
+  int inliers = 0;
+  double inlier_rmse = 0;  // in the reference submap's units
+  std::vector<LandmarkPair> inlier_pairs;  // empty when !verified
+};
+
+// Median over landmarks of the distance to the nearest keyframe centre; 1 if undefined.
+double SubmapDepthScale(const Submap& submap);
+
+PairVerification VerifySubmapPair(const Submap& reference, const Submap& query,
+                                  const VerificationOptions& options = {});
+
+}  // namespace glam

@@ -1,0 +1,30 @@
+// One published state of the global map: where every submap currently sits in the world.
+// Thread 2 publishes a new immutable snapshot with a larger revision after every alignment
+// step; readers (the exporter, the server, tileset.json) hold a shared_ptr<const MapSnapshot>
+// and never see a half-updated map. Submap contents never change after completion, so the
+// placement per submap is all a revision needs (docs/architecture.md, "Map revision").
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "engine/core/sim3.h"
+
+namespace glam {
+
+struct SubmapPlacement {
+  std::uint32_t id = 0;
+  Sim3 world_from_submap;
+  // Not (yet) linked to the main map: its placement is only a guess (it sits at the pose of
+  // the submap before it), so whole-map exports leave it out and viewers mark it.
+  bool disconnected = false;
+  std::int64_t first_frame = 0;
+  std::int64_t last_frame = 0;
+};
+
+struct MapSnapshot {
+  std::int64_t revision = 0;
+  std::vector<SubmapPlacement> submaps;  // in order of completion (ids ascending)
+};
+
+}  // namespace glam
