@@ -13,7 +13,7 @@
 #include "engine/core/bounded_queue.h"
 #include "engine/core/error.h"
 #include "engine/core/logging.h"
-#include "engine/features/sift_extractor.h"
+#include "engine/pipeline/decoder_worker.h"
 #include "engine/map/submap_io.h"
 #include "engine/pipeline/map_assembly.h"
 #include "engine/submap/submap_builder.h"
@@ -27,12 +27,6 @@ using Clock = std::chrono::steady_clock;
 double Seconds(Clock::time_point since) {
   return std::chrono::duration<double>(Clock::now() - since).count();
 }
-
-struct FrameFeatures {
-  std::int64_t index = 0;
-  double timestamp_s = 0;
-  Features features;
-};
 
 void PrepareOutputDirectory(const std::filesystem::path& out_dir) {
   std::error_code ec;
@@ -57,168 +51,7 @@ void WriteJson(const std::filesystem::path& path, const nlohmann::json& json) {
   if (!out) throw EnvironmentError(fmt::format("cannot write {}", path.string()));
 }
 
-// The decoder side: owns the frame source and one SIFT extractor per feature worker, runs on
-// its own thread. Frames are decoded in batches of `workers` and their features extracted in
-// parallel, then pushed in input order.
-class DecoderWorker {
- public:
-  DecoderWorker(FrameSource& source, const SiftOptions& sift, int workers,
-                BoundedQueue<FrameFeatures>& queue, CancellationToken cancel,
-                const std::atomic<bool>& stop, std::size_t min_features)
-      : source_(source),
-        queue_(queue),
-        cancel_(std::move(cancel)),
-        stop_(stop),
-        min_features_(min_features) {
-    // Separate extractors (not copies sharing one cv::SIFT) so workers share no state.
-    for (int i = 0; i < workers; ++i) extractors_.emplace_back(sift);
-  }
-
-  void Run() {
-    try {
-      bool more = true;
-      while (more && !cancel_.IsCancelled() && !stop_.load()) {
-        const auto start = Clock::now();
-        std::vector<Frame> batch;
-        while (batch.size() < extractors_.size()) {
-          std::optional<Frame> frame = source_.Next();
-          if (!frame) {
-            more = false;
-            break;
-          }
-          batch.push_back(std::move(*frame));
-        }
-        std::vector<FrameFeatures> items = ExtractBatch(batch);
-        busy_seconds_ += Seconds(start);
-        for (FrameFeatures& item : items) {
-          ++frames_;
-          if (item.features.size() < min_features_) ++frames_without_features_;
-          if (!queue_.Push(std::move(item))) {  // consumer closed the queue
-            more = false;
-            break;
-          }
-        }
-      }
-    } catch (...) {
-      error_ = std::current_exception();
-    }
-    queue_.Close();
-  }
-
-  std::exception_ptr error() const { return error_; }
-
- private:
-  // Frame i goes to extractor i; all but the first on helper threads. Joins every thread
-  // before rethrowing the first error, so no thread outlives a failure.
-  std::vector<FrameFeatures> ExtractBatch(const std::vector<Frame>& batch) {
-    std::vector<FrameFeatures> items(batch.size());
-    std::vector<std::exception_ptr> errors(batch.size());
-    auto extract = [&](std::size_t i) {
-      try {
-        items[i] = {batch[i].index, batch[i].timestamp_s, extractors_[i].Extract(batch[i].bgr)};
-      } catch (...) {
-        errors[i] = std::current_exception();
-      }
-    };
-    std::vector<std::thread> helpers;
-    for (std::size_t i = 1; i < batch.size(); ++i) helpers.emplace_back(extract, i);
-    if (!batch.empty()) extract(0);
-    for (std::thread& t : helpers) t.join();
-    for (const std::exception_ptr& e : errors) {
-      if (e) std::rethrow_exception(e);
-    }
-    return items;
-  }
-
- public:
-  double busy_seconds() const { return busy_seconds_; }
-  std::int64_t frames() const { return frames_; }
-  std::int64_t frames_without_features() const { return frames_without_features_; }
-
- private:
-  FrameSource& source_;
-  std::vector<SiftExtractor> extractors_;
-  BoundedQueue<FrameFeatures>& queue_;
-  CancellationToken cancel_;
-  const std::atomic<bool>& stop_;
-  const std::size_t min_features_;
-  std::exception_ptr error_;
-  double busy_seconds_ = 0;
-  std::int64_t frames_ = 0;
-  std::int64_t frames_without_features_ = 0;
-};
-
-// The user-facing explanation of what could not be mapped (see MappingReport::warnings).
-std::vector<std::string> Diagnose(const MappingReport& r, int min_features) {
-  std::vector<std::string> warnings;
-  if (r.input_ended_early) {
-    warnings.push_back(fmt::format(
-        "the input ended after {} frames were read although {} were expected: the file is "
-        "truncated or corrupt; only the frames before the damage were mapped",
-        r.frames_decoded, r.frames_total));
-  }
-  if (r.frames_without_features == r.frames_decoded) {
-    warnings.push_back(fmt::format(
-        "no features in any of the {} frames (fewer than {} each): the video is black, uniform "
-        "or textureless, so nothing can be mapped",
-        r.frames_decoded, min_features));
-    return warnings;
-  }
-  if (r.frames_without_features * 10 >= r.frames_decoded) {
-    warnings.push_back(fmt::format(
-        "no features in {} of {} frames (fewer than {} each): dark, uniform or blurred frames "
-        "cannot be posed",
-        r.frames_without_features, r.frames_decoded, min_features));
-  }
-  if (r.submaps == 0 && r.keyframes > 0) {
-    warnings.push_back(fmt::format(
-        "none of the {} frames could be posed: maps were started but none reached 3 keyframes "
-        "(too short a clip or too little motion; tracking lost {} times)",
-        r.frames_decoded, r.tracking_losses));
-  } else if (r.submaps == 0) {
-    warnings.push_back(fmt::format(
-        "none of the {} frames could be posed: no pair of frames had enough parallax to start a "
-        "map (a static or hovering camera, or too short a clip), or consecutive frames do not "
-        "overlap",
-        r.frames_decoded));
-  } else if (r.frames_unposed * 10 >= r.frames_decoded) {
-    warnings.push_back(fmt::format("{} of {} frames could not be posed (see trajectory.tum)",
-                                   r.frames_unposed, r.frames_decoded));
-  }
-  return warnings;
-}
-
 }  // namespace
-
-nlohmann::json MappingReport::ToJson() const {
-  return {{"input", input},
-          {"frames_total", frames_total},
-          {"frames_decoded", frames_decoded},
-          {"frames_posed", frames_posed},
-          {"frames_unposed", frames_unposed},
-          {"frames_without_features", frames_without_features},
-          {"keyframes", keyframes},
-          {"submaps", submaps},
-          {"submaps_discarded", submaps_discarded},
-          {"disconnected_submaps", disconnected_submaps},
-          {"points", points},
-          {"tracking_losses", tracking_losses},
-          {"initial_focal_px", initial_focal},
-          {"focal_px", focal},
-          {"focal_original_px", focal_original},
-          {"fps", fps},
-          {"processing_fps", processing_fps},
-          {"processing_size", {processing_width, processing_height}},
-          {"input_ended_early", input_ended_early},
-          {"warnings", warnings},
-          {"timings_s",
-           {{"decode_and_features", timings.decode_and_features_s},
-            {"builder", timings.builder_s},
-            {"bundle_adjustment", timings.bundle_adjust_s},
-            {"chaining", timings.chaining_s},
-            {"writing", timings.writing_s},
-            {"total", timings.total_s}}}};
-}
 
 MappingReport RunMapping(const std::filesystem::path& input, const std::filesystem::path& out_dir,
                          const MappingOptions& options, const ProgressCallback& progress,

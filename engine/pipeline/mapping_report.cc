@@ -1,0 +1,76 @@
+#include "engine/pipeline/mapping_report.h"
+
+#include <fmt/format.h>
+
+namespace glam {
+
+std::vector<std::string> Diagnose(const MappingReport& r, int min_features) {
+  std::vector<std::string> warnings;
+  if (r.input_ended_early) {
+    warnings.push_back(fmt::format(
+        "the input ended after {} frames were read although {} were expected: the file is "
+        "truncated or corrupt; only the frames before the damage were mapped",
+        r.frames_decoded, r.frames_total));
+  }
+  if (r.frames_without_features == r.frames_decoded) {
+    warnings.push_back(fmt::format(
+        "no features in any of the {} frames (fewer than {} each): the video is black, uniform "
+        "or textureless, so nothing can be mapped",
+        r.frames_decoded, min_features));
+    return warnings;
+  }
+  if (r.frames_without_features * 10 >= r.frames_decoded) {
+    warnings.push_back(fmt::format(
+        "no features in {} of {} frames (fewer than {} each): dark, uniform or blurred frames "
+        "cannot be posed",
+        r.frames_without_features, r.frames_decoded, min_features));
+  }
+  if (r.submaps == 0 && r.keyframes > 0) {
+    warnings.push_back(fmt::format(
+        "none of the {} frames could be posed: maps were started but none reached 3 keyframes "
+        "(too short a clip or too little motion; tracking lost {} times)",
+        r.frames_decoded, r.tracking_losses));
+  } else if (r.submaps == 0) {
+    warnings.push_back(fmt::format(
+        "none of the {} frames could be posed: no pair of frames had enough parallax to start a "
+        "map (a static or hovering camera, or too short a clip), or consecutive frames do not "
+        "overlap",
+        r.frames_decoded));
+  } else if (r.frames_unposed * 10 >= r.frames_decoded) {
+    warnings.push_back(fmt::format("{} of {} frames could not be posed (see trajectory.tum)",
+                                   r.frames_unposed, r.frames_decoded));
+  }
+  return warnings;
+}
+
+nlohmann::json MappingReport::ToJson() const {
+  return {{"input", input},
+          {"frames_total", frames_total},
+          {"frames_decoded", frames_decoded},
+          {"frames_posed", frames_posed},
+          {"frames_unposed", frames_unposed},
+          {"frames_without_features", frames_without_features},
+          {"keyframes", keyframes},
+          {"submaps", submaps},
+          {"submaps_discarded", submaps_discarded},
+          {"disconnected_submaps", disconnected_submaps},
+          {"points", points},
+          {"tracking_losses", tracking_losses},
+          {"initial_focal_px", initial_focal},
+          {"focal_px", focal},
+          {"focal_original_px", focal_original},
+          {"fps", fps},
+          {"processing_fps", processing_fps},
+          {"processing_size", {processing_width, processing_height}},
+          {"input_ended_early", input_ended_early},
+          {"warnings", warnings},
+          {"timings_s",
+           {{"decode_and_features", timings.decode_and_features_s},
+            {"builder", timings.builder_s},
+            {"bundle_adjustment", timings.bundle_adjust_s},
+            {"chaining", timings.chaining_s},
+            {"writing", timings.writing_s},
+            {"total", timings.total_s}}}};
+}
+
+}  // namespace glam
