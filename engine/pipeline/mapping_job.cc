@@ -4,7 +4,8 @@
 #include <chrono>
 #include <exception>
 #include <fstream>
-#include <mutex>
+#include <memory>
+#include <optional>
 #include <thread>
 #include <vector>
 
@@ -15,7 +16,10 @@
 #include "engine/core/logging.h"
 #include "engine/pipeline/decoder_worker.h"
 #include "engine/map/submap_io.h"
-#include "engine/pipeline/map_assembly.h"
+#include "engine/alignment/vocabulary_tree.h"
+#include "engine/pipeline/alignment_thread.h"
+#include "engine/pipeline/map_export.h"
+#include "engine/pipeline/resume_checkpoint.h"
 #include "engine/submap/submap_builder.h"
 #include "engine/video/frame_source.h"
 
@@ -44,11 +48,73 @@ void PrepareOutputDirectory(const std::filesystem::path& out_dir) {
   std::filesystem::remove(probe, ec);
 }
 
+// Temporary file + rename: a reader (the server) never sees half a report.
 void WriteJson(const std::filesystem::path& path, const nlohmann::json& json) {
-  std::ofstream out(path);
-  out << json.dump(2) << "\n";
-  out.close();
-  if (!out) throw EnvironmentError(fmt::format("cannot write {}", path.string()));
+  const std::filesystem::path tmp = path.string() + ".tmp";
+  {
+    std::ofstream out(tmp);
+    out << json.dump(2) << "\n";
+    out.close();
+    if (!out) throw EnvironmentError(fmt::format("cannot write {}", tmp.string()));
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) throw EnvironmentError(fmt::format("cannot write {}: {}", path.string(), ec.message()));
+}
+
+// A fresh run owns out_dir's submaps/ and checkpoint: leftovers of an earlier run there would
+// otherwise be mixed into this one's map.
+void ClearPreviousRun(const std::filesystem::path& out_dir) {
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator(out_dir / "submaps", ec)) {
+    std::filesystem::remove_all(entry.path(), ec);
+  }
+  std::filesystem::remove(out_dir / kCheckpointFile, ec);
+}
+
+// The checkpoint of out_dir if it belongs to this input and every submap it names is
+// readable; otherwise nullopt (the run starts from the beginning, and says why).
+std::optional<ResumeCheckpoint> UsableCheckpoint(const std::filesystem::path& out_dir,
+                                                 const MappingReport& report) {
+  std::optional<ResumeCheckpoint> checkpoint;
+  try {
+    checkpoint = ReadCheckpoint(out_dir);
+  } catch (const InputError& e) {
+    GLAM_LOG_WARN("cannot resume: {}", e.what());
+    return std::nullopt;
+  }
+  if (!checkpoint) {
+    GLAM_LOG_INFO("nothing to resume in {}: starting from the first frame", out_dir.string());
+    return std::nullopt;
+  }
+  if (checkpoint->processing_width != report.processing_width ||
+      checkpoint->processing_height != report.processing_height) {
+    GLAM_LOG_WARN("cannot resume: {} was made at another processing size", kCheckpointFile);
+    return std::nullopt;
+  }
+  for (std::uint32_t id = 0; id < checkpoint->next_submap_id; ++id) {
+    if (!std::filesystem::exists(SubmapDirectory(out_dir / "submaps", id))) {
+      GLAM_LOG_WARN("cannot resume: submap {} is missing", id);
+      return std::nullopt;
+    }
+  }
+  return checkpoint;
+}
+
+// After `completed[i]` is on disk: the next submap starts at completed[i + 1]'s first frame,
+// or where the builder's open submap starts.
+ResumeCheckpoint MakeCheckpoint(const SubmapBuilder& builder, const std::vector<Submap>& completed,
+                                std::size_t i, const MappingReport& report) {
+  ResumeCheckpoint c;
+  c.next_submap_id = completed[i].id + 1;
+  c.resume_frame = i + 1 < completed.size()
+                       ? completed[i + 1].first_frame
+                       : builder.open_submap_first_frame().value_or(completed[i].last_frame + 1);
+  c.focal = builder.focal();
+  c.input = report.input;
+  c.processing_width = report.processing_width;
+  c.processing_height = report.processing_height;
+  return c;
 }
 
 }  // namespace
@@ -61,9 +127,13 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   cancel.ThrowIfCancelled();
   std::unique_ptr<FrameSource> source = OpenFrameSource(input, options.source);
   const FrameSourceInfo info = source->info();
-  const Intrinsics intrinsics = ResolveIntrinsics(options, info);
+  Intrinsics intrinsics = ResolveIntrinsics(options, info);
   PrepareOutputDirectory(out_dir);
   const std::filesystem::path submaps_root = out_dir / "submaps";
+  const VocabularyTree loaded_vocabulary =
+      options.vocabulary.empty() ? VocabularyTree() : VocabularyTree::Load(options.vocabulary);
+  const VocabularyTree& vocabulary =
+      options.vocabulary.empty() ? VocabularyTree::Default() : loaded_vocabulary;
 
   MappingReport report;
   report.input = input.string();
@@ -74,13 +144,32 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   if (info.frame_count > 0) {
     report.frames_total = (info.frame_count + options.source.stride - 1) / options.source.stride;
   }
+  const std::optional<ResumeCheckpoint> resume =
+      options.resume ? UsableCheckpoint(out_dir, report) : std::nullopt;
+  if (resume) {
+    intrinsics.fx = intrinsics.fy = resume->focal;
+    report.resumed_from_frame = resume->resume_frame;
+    source->SeekTo(resume->resume_frame);
+    GLAM_LOG_INFO("resuming {} at frame {} with submap {} (focal {:.1f} px)", report.input,
+                  resume->resume_frame, resume->next_submap_id, resume->focal);
+  } else {
+    ClearPreviousRun(out_dir);
+  }
   GLAM_LOG_INFO("mapping {}: {}x{} -> {}x{}, {:.3g} fps, ~{} frames, initial focal {:.1f} px",
                 report.input, info.original_size.width, info.original_size.height,
                 info.processing_size.width, info.processing_size.height, report.fps,
                 report.frames_total, intrinsics.fx);
 
   SubmapBuilder builder(intrinsics, options.submap, cancel);
-  MapAssembler assembler(options.chaining, options.leveling);
+  if (resume) builder.ResumeAt(resume->next_submap_id);
+  SubmapAligner aligner(vocabulary, options.alignment, submaps_root, cancel);
+  AlignmentThread alignment(aligner, options.alignment_queue_capacity);
+  if (resume) {
+    // Thread 2 rebuilds its database and graph from the persisted submaps.
+    for (std::uint32_t id = 0; id < resume->next_submap_id; ++id) {
+      alignment.Push(std::make_shared<const Submap>(ReadSubmap(submaps_root, id)));
+    }
+  }
   BoundedQueue<FrameFeatures> queue(options.queue_capacity);
   std::atomic<bool> stop{false};
   const int min_features = options.submap.min_tracking_inliers;
@@ -91,34 +180,40 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   MappingProgress state;
   state.stage = "mapping";
   state.frames_total = report.frames_total;
+  const std::int64_t first_frame = resume ? resume->resume_frame / options.source.stride : 0;
+  state.frames_done = first_frame;
   auto last_progress = Clock::now() - std::chrono::seconds(1);
+  std::int64_t submaps_completed = resume ? resume->next_submap_id : 0;
   auto emit = [&](bool force) {
     if (!progress) return;
     if (!force && Clock::now() - last_progress < std::chrono::milliseconds(250)) return;
     last_progress = Clock::now();
     const double elapsed = Seconds(start);
-    state.fps = elapsed > 0 ? static_cast<double>(state.frames_done) / elapsed : 0;
+    const double done_here = static_cast<double>(state.frames_done - first_frame);
+    state.fps = elapsed > 0 ? done_here / elapsed : 0;
     state.eta_s = (state.frames_total > 0 && state.fps > 0)
                       ? std::max<double>(0, static_cast<double>(state.frames_total - state.frames_done) / state.fps)
                       : -1;
-    state.submaps_completed = static_cast<std::int64_t>(assembler.nodes().size());
-    // Until global alignment exists every placed submap is one new map revision.
-    state.submaps_aligned = state.submaps_completed - assembler.disconnected();
-    state.revision = state.submaps_completed;
+    state.submaps_completed = submaps_completed;
+    state.submaps_aligned = alignment.submaps_aligned();
+    state.revision = alignment.revision();
     state.keyframes = builder.stats().keyframes;
-    state.points = assembler.points();
+    state.points = alignment.points();
     progress(state);
   };
   double writing = 0;
   auto consume = [&](std::vector<Submap> completed) {
-    for (Submap& submap : completed) {
+    for (std::size_t i = 0; i < completed.size(); ++i) {
+      Submap& submap = completed[i];
       const auto write_start = Clock::now();
       WriteSubmap(submap, submaps_root);
+      WriteCheckpoint(out_dir, MakeCheckpoint(builder, completed, i, report));
       writing += Seconds(write_start);
-      assembler.Add(submap);
       GLAM_LOG_INFO("submap {} completed: frames {}-{}, {} keyframes, {} landmarks", submap.id,
                     submap.first_frame, submap.last_frame, submap.keyframes.size(),
                     submap.landmarks.size());
+      ++submaps_completed;
+      alignment.Push(std::make_shared<const Submap>(std::move(submap)));
       emit(true);  // every completed submap is reported (the server turns it into an event)
     }
   };
@@ -128,7 +223,9 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   try {
     while (true) {
       cancel.ThrowIfCancelled();
+      alignment.RethrowIfFailed();
       std::optional<FrameFeatures> item = queue.PopFor(std::chrono::milliseconds(100));
+      if (state.revision != alignment.revision()) emit(true);  // a new map revision
       if (!item) {
         if (queue.IsClosed() && queue.Size() == 0) break;
         continue;
@@ -146,50 +243,64 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   stop.store(true);
   queue.Close();
   decoder.join();
-  if (error) std::rethrow_exception(error);
-  if (worker.error()) std::rethrow_exception(worker.error());
-  cancel.ThrowIfCancelled();
-
-  {
+  if (error) {
+    alignment.Abort();
+    std::rethrow_exception(error);
+  }
+  if (worker.error()) {
+    alignment.Abort();
+    std::rethrow_exception(worker.error());
+  }
+  try {
+    cancel.ThrowIfCancelled();
     const auto t0 = Clock::now();
     std::vector<Submap> completed = builder.Finish();
     builder_seconds += Seconds(t0);
     consume(std::move(completed));
+  } catch (...) {
+    alignment.Abort();
+    throw;
   }
-  if (worker.frames() == 0) {
+  alignment.Finish();  // joins thread 2; rethrows its error
+  if (worker.frames() == 0 && !resume) {
     throw InputError(fmt::format("{}: no frames could be decoded", report.input));
   }
 
   state.stage = "writing";
   emit(true);
   const auto write_start = Clock::now();
-  assembler.WriteTrajectory(out_dir / "trajectory.tum", report.fps);
-  assembler.WritePoints(out_dir / "points.ply");
-  assembler.WriteGraph(out_dir / "graph.json");
+  const std::shared_ptr<const MapSnapshot> snapshot = aligner.snapshot();
+  const MapExportCounts exported = ExportWorldMap(*snapshot, submaps_root, out_dir, report.fps);
+  WriteJson(out_dir / "graph.json", aligner.GraphJson());
   writing += Seconds(write_start);
 
   const SubmapBuilderStats& stats = builder.stats();
-  report.frames_decoded = worker.frames();
-  report.frames_posed = assembler.frames_posed();
-  report.frames_unposed = report.frames_decoded - report.frames_posed;
+  report.frames_decoded = worker.frames() + (resume ? first_frame : 0);
+  report.frames_posed = exported.frames_posed;
+  report.frames_unposed = std::max<std::int64_t>(0, report.frames_decoded - report.frames_posed);
   report.frames_without_features = worker.frames_without_features();
   report.keyframes = stats.keyframes;
-  report.submaps = static_cast<std::int64_t>(assembler.nodes().size());
+  report.submaps = static_cast<std::int64_t>(snapshot->submaps.size());
   report.submaps_discarded = stats.submaps_discarded;
-  report.disconnected_submaps = assembler.disconnected();
-  report.points = assembler.points();
+  report.disconnected_submaps = report.submaps - exported.submaps_exported;
+  report.points = exported.points;
   report.tracking_losses = stats.tracking_losses;
+  report.revision = snapshot->revision;
+  report.graph_edges = static_cast<std::int64_t>(aligner.edges().size());
+  for (const AlignmentEdge& e : aligner.edges()) report.retrieved_edges += e.temporal ? 0 : 1;
+  report.graph_landmarks = static_cast<std::int64_t>(aligner.graph_landmarks());
+  report.alignment = aligner.timings();
   report.focal = builder.focal();
   report.focal_original = info.scale > 0 ? builder.focal() / info.scale : builder.focal();
   report.input_ended_early = source->ended_early();
   report.timings.decode_and_features_s = worker.busy_seconds();
   report.timings.builder_s = builder_seconds;
   report.timings.bundle_adjust_s = stats.bundle_adjust_seconds;
-  report.timings.chaining_s = assembler.chaining_seconds();
+  report.timings.alignment_s = alignment.busy_seconds();
   report.timings.writing_s = writing;
   report.timings.total_s = Seconds(start);
   report.processing_fps = report.timings.total_s > 0
-                              ? static_cast<double>(report.frames_decoded) / report.timings.total_s
+                              ? static_cast<double>(worker.frames()) / report.timings.total_s
                               : 0;
   report.warnings = Diagnose(report, min_features);
   for (const std::string& warning : report.warnings) GLAM_LOG_WARN("{}: {}", report.input, warning);

@@ -13,12 +13,12 @@ void MappingOptions::Check() const {
   source.Check();
   sift.Check();
   submap.Check();
-  chaining.Check();
-  leveling.Check();
+  alignment.Check();
   if (intrinsics) intrinsics->Check();
   if (focal_px) CheckGreater("MappingOptions.focal_px", *focal_px, 0.0);
   CheckInRange("MappingOptions.default_focal_factor", default_focal_factor, 0.05, 20.0);
   CheckGreater("MappingOptions.queue_capacity", queue_capacity, std::size_t{0});
+  CheckGreater("MappingOptions.alignment_queue_capacity", alignment_queue_capacity, std::size_t{0});
   CheckInRange("MappingOptions.feature_workers", feature_workers, 1, 16);
 }
 

@@ -9,8 +9,9 @@
 
 #include "engine/core/camera.h"
 #include "engine/features/sift_extractor.h"
-#include "engine/alignment/submap_verifier.h"
-#include "engine/alignment/world_leveling.h"
+#include <filesystem>
+
+#include "engine/alignment/submap_aligner.h"
 #include "engine/submap/submap_options.h"
 #include "engine/video/frame_source.h"
 
@@ -20,8 +21,10 @@ struct MappingOptions {
   FrameSourceOptions source;
   SiftOptions sift;
   SubmapOptions submap;
-  VerificationOptions chaining;
-  LevelingOptions leveling;
+  AlignerOptions alignment;
+  // Vocabulary tree for finding overlapping submaps; empty = the one built into glam
+  // (data/vocabulary/README.md says how it was trained).
+  std::filesystem::path vocabulary;
   // Full calibration at original resolution (e.g. from --intrinsics file.json).
   std::optional<Intrinsics> intrinsics;
   // Focal length in pixels at original resolution (--focal); ignored when `intrinsics` is set.
@@ -31,6 +34,9 @@ struct MappingOptions {
   double default_focal_factor = 0.8;
   // Frames (with features) buffered between the decoder thread and the submap builder.
   std::size_t queue_capacity = 8;
+  // Completed submaps waiting for thread 2; when alignment falls behind, thread 1 waits
+  // rather than piling up submaps in memory.
+  std::size_t alignment_queue_capacity = 4;
   // Frames whose SIFT features are extracted at the same time (one extractor per worker). SIFT
   // on every frame is the cost that bounds throughput (~270 ms per 720p frame on one core),
   // so on 2 cores two workers nearly double the frame rate; the submap builder needs ~10 %.

@@ -1,8 +1,32 @@
 #include "engine/pipeline/mapping_report.h"
 
+#include <algorithm>
+
 #include <fmt/format.h>
 
 namespace glam {
+namespace {
+
+// Per submap timings plus the summary a user looks for first: does thread 2 keep up?
+nlohmann::json AlignmentJson(const std::vector<SubmapAlignmentTiming>& timings) {
+  nlohmann::json per_submap = nlohmann::json::array();
+  double total = 0, worst = 0;
+  for (const SubmapAlignmentTiming& t : timings) {
+    per_submap.push_back({{"submap", t.submap},
+                          {"candidates", t.candidates},
+                          {"edges", t.edges},
+                          {"retrieval_s", t.retrieval_s},
+                          {"verification_s", t.verification_s},
+                          {"optimization_s", t.optimization_s},
+                          {"total_s", t.total_s}});
+    total += t.total_s;
+    worst = std::max(worst, t.total_s);
+  }
+  const double mean = timings.empty() ? 0.0 : total / static_cast<double>(timings.size());
+  return {{"mean_latency_s", mean}, {"max_latency_s", worst}, {"per_submap", per_submap}};
+}
+
+}  // namespace
 
 std::vector<std::string> Diagnose(const MappingReport& r, int min_features) {
   std::vector<std::string> warnings;
@@ -56,6 +80,10 @@ nlohmann::json MappingReport::ToJson() const {
           {"disconnected_submaps", disconnected_submaps},
           {"points", points},
           {"tracking_losses", tracking_losses},
+          {"resumed_from_frame", resumed_from_frame},
+          {"revision", revision},
+          {"graph", {{"edges", graph_edges}, {"retrieved_edges", retrieved_edges}, {"landmarks", graph_landmarks}}},
+          {"alignment", AlignmentJson(alignment)},
           {"initial_focal_px", initial_focal},
           {"focal_px", focal},
           {"focal_original_px", focal_original},
@@ -68,7 +96,7 @@ nlohmann::json MappingReport::ToJson() const {
            {{"decode_and_features", timings.decode_and_features_s},
             {"builder", timings.builder_s},
             {"bundle_adjustment", timings.bundle_adjust_s},
-            {"chaining", timings.chaining_s},
+            {"alignment", timings.alignment_s},
             {"writing", timings.writing_s},
             {"total", timings.total_s}}}};
 }

@@ -8,13 +8,15 @@
 
 #include <nlohmann/json.hpp>
 
+#include "engine/alignment/submap_aligner.h"
+
 namespace glam {
 
 struct MappingTimings {
   double decode_and_features_s = 0;  // decoder thread busy time (decode + SIFT)
   double builder_s = 0;              // submap builder time, including BA
   double bundle_adjust_s = 0;        // of which bundle adjustment
-  double chaining_s = 0;             // linking + levelling
+  double alignment_s = 0;            // thread 2 busy time (retrieval, verification, graph)
   double writing_s = 0;              // submaps and whole-map files
   double total_s = 0;
 };
@@ -34,6 +36,13 @@ struct MappingReport {
   std::int64_t disconnected_submaps = 0;
   std::int64_t points = 0;
   std::int64_t tracking_losses = 0;
+  std::int64_t resumed_from_frame = -1;  // first frame mapped by this run when resumed
+  std::int64_t revision = 0;             // of the final map
+  std::int64_t graph_edges = 0;
+  std::int64_t retrieved_edges = 0;      // edges found by the vocabulary tree (loops, cuts)
+  std::int64_t graph_landmarks = 0;
+  // Thread 2's work per submap, in order (report.json "alignment").
+  std::vector<SubmapAlignmentTiming> alignment;
   double initial_focal = 0;  // processing pixels
   double focal = 0;          // estimate, processing pixels
   double focal_original = 0; // estimate, original-resolution pixels

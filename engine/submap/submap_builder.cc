@@ -22,6 +22,11 @@ Camera SubmapBuilder::CurrentCamera() const {
   return Camera(in);
 }
 
+void SubmapBuilder::ResumeAt(std::uint32_t next_submap_id) {
+  GLAM_CHECK(stats_.frames_seen == 0, "ResumeAt after frames were added");
+  next_submap_id_ = next_submap_id;
+}
+
 std::optional<std::int64_t> SubmapBuilder::open_submap_first_frame() const {
   if (open_.frames.empty()) return std::nullopt;
   return open_.frames.front().index;

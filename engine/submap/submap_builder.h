@@ -53,6 +53,9 @@ class SubmapBuilder {
   // Running median of all keyframes' refined focal lengths (the paper's focal estimate).
   double focal() const { return focal_; }
   const SubmapBuilderStats& stats() const { return stats_; }
+  // Continue a resumed run: the first submap this builder completes gets `next_submap_id`
+  // (ids stay unique in the job's submaps/ folder). Only before the first AddFrame.
+  void ResumeAt(std::uint32_t next_submap_id);
   // Id the next completed submap will get; also the number of submaps emitted so far.
   std::uint32_t next_submap_id() const { return next_submap_id_; }
   // Frame index of the first frame of the open submap (resume point), if any.

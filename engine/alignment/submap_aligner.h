@@ -1,0 +1,142 @@
+// Thread 2 of GLAM (paper, "Global Submap Alignment"): every completed submap is
+//   1. quantised into visual words (vocabulary tree) and used to query the inverted-index
+//      database for earlier submaps that saw the same ground (loop closures, re-localisation
+//      after a tracking loss), then added to the database;
+//   2. verified against its temporal neighbour (through the 10 % overlap hand-off) and
+//      against the retrieved candidates by descriptor matching + Sim3 RANSAC;
+//   3. added to the submap factor graph with its verified inlier correspondences, and the
+//      graph is re-optimised (warm-started) — a loop edge pulls the drifted chain into place;
+//   4. published as a new MapSnapshot revision.
+//
+// Submaps that cannot be verified against the main map are kept in "pending" components with
+// their relative placements and edges, marked disconnected; when a later submap links a
+// pending component to the main map, the whole component joins the graph. Memory stays
+// bounded: the aligner keeps the visual words (inside the database), the last submap, and
+// per submap only its metadata; candidates are read back from disk (submaps/<id>/) to verify.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "engine/alignment/submap_database.h"
+#include "engine/alignment/submap_graph.h"
+#include "engine/alignment/submap_verifier.h"
+#include "engine/alignment/vocabulary_tree.h"
+#include "engine/core/cancellation.h"
+#include "engine/map/map_snapshot.h"
+#include "engine/map/submap.h"
+#include "engine/alignment/world_leveling.h"
+
+namespace glam {
+
+struct AlignerOptions {
+  // Temporal neighbours (overlap hand-off).
+  VerificationOptions verification;
+  // Retrieved candidates need more evidence than neighbours: a false loop edge bends the map.
+  int min_retrieval_inliers = 30;
+  // Database results verified per submap (best tf-idf scores first).
+  int max_candidates = 3;
+  // Candidates scoring below this fraction of the best retrieved score are not verified.
+  double min_relative_score = 0.3;
+  // A retrieved edge inside the main map is rejected when its scale disagrees with the current
+  // estimate by more than this factor (a gross mismatch, not drift).
+  double max_scale_disagreement = 1.5;
+  SubmapGraphOptions graph;
+  LevelingOptions leveling;
+
+  void Check() const;  // throws InputError
+};
+
+struct AlignmentEdge {
+  std::uint32_t reference = 0;  // the earlier submap
+  std::uint32_t query = 0;      // the submap being added
+  bool temporal = false;        // overlap neighbour (else: retrieved by the vocabulary tree)
+  double score = 0;             // database score (retrieved edges)
+  int matches = 0;
+  int inliers = 0;
+  double inlier_rmse = 0;       // reference units
+  Sim3 reference_from_query;
+};
+
+struct SubmapAlignmentTiming {
+  std::uint32_t submap = 0;
+  int candidates = 0;       // retrieved candidates verified
+  int edges = 0;            // verified edges added
+  double retrieval_s = 0;   // quantisation + query + insertion
+  double verification_s = 0;
+  double optimization_s = 0;
+  double total_s = 0;
+};
+
+class SubmapAligner {
+ public:
+  // `submaps_root`: where completed submaps were persisted (ReadSubmap), for candidates.
+  SubmapAligner(const VocabularyTree& vocabulary, const AlignerOptions& options,
+                std::filesystem::path submaps_root, CancellationToken cancel = {});
+
+  // One alignment step for a completed, already persisted submap. Not thread-safe: call from
+  // one thread (thread 2); snapshot() may be called concurrently from any thread.
+  void Add(const Submap& submap);
+
+  std::shared_ptr<const MapSnapshot> snapshot() const;
+
+  // For reports, after the last Add.
+  const std::vector<AlignmentEdge>& edges() const { return edges_; }
+  const std::vector<SubmapAlignmentTiming>& timings() const { return timings_; }
+  std::size_t graph_landmarks() const { return graph_.num_landmarks(); }
+  // graph.json: nodes (placement, frames, disconnected), edges (kind, score, inliers, Sim3).
+  nlohmann::json GraphJson() const;
+
+ private:
+  struct Node {
+    std::uint32_t id = 0;
+    std::int64_t first_frame = 0;
+    std::int64_t last_frame = 0;
+    std::size_t frames = 0;
+    double depth_scale = 1;
+    int component = 0;  // 0 = main map (in the graph), else a pending component
+  };
+  struct VerifiedEdge {
+    AlignmentEdge edge;
+    std::vector<LandmarkPair> pairs;
+  };
+  struct PendingComponent {
+    Sim3 world_from_component;  // display placement only
+    std::map<std::uint32_t, Sim3> component_from_submap;
+    std::vector<VerifiedEdge> edges;  // internal edges, replayed into the graph on joining
+  };
+
+  std::vector<VerifiedEdge> VerifyCandidates(const Submap& submap, SubmapAlignmentTiming* timing);
+  void PlaceInMain(const Submap& submap, const std::vector<VerifiedEdge>& verified);
+  void PlacePending(const Submap& submap, const std::vector<VerifiedEdge>& verified);
+  void JoinMain(int component, const Sim3& world_from_component);
+  void AddToGraph(std::uint32_t id, const Sim3& world_from_submap);
+  void AddEdgeToGraph(const VerifiedEdge& edge);
+  Sim3 CurrentWorldFromSubmap(std::uint32_t id) const;
+  void Publish();
+
+  const VocabularyTree& vocabulary_;
+  AlignerOptions options_;
+  std::filesystem::path submaps_root_;
+  CancellationToken cancel_;
+  SubmapDatabase database_;
+  SubmapGraph graph_;
+  std::map<std::uint32_t, Node> nodes_;
+  std::map<int, PendingComponent> pending_;
+  int next_component_ = 1;
+  std::optional<Submap> previous_;  // the temporal neighbour of the next submap
+  std::vector<AlignmentEdge> edges_;
+  std::vector<SubmapAlignmentTiming> timings_;
+  std::int64_t revision_ = 0;
+  mutable std::mutex snapshot_mutex_;
+  std::shared_ptr<const MapSnapshot> snapshot_;
+};
+
+}  // namespace glam

@@ -1,0 +1,52 @@
+#include "engine/pipeline/resume_checkpoint.h"
+
+#include <fstream>
+#include <sstream>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "engine/core/error.h"
+
+namespace glam {
+
+void WriteCheckpoint(const std::filesystem::path& out_dir, const ResumeCheckpoint& c) {
+  const nlohmann::json json = {{"next_submap_id", c.next_submap_id},
+                               {"resume_frame", c.resume_frame},
+                               {"focal_px", c.focal},
+                               {"input", c.input},
+                               {"processing_size", {c.processing_width, c.processing_height}}};
+  const std::filesystem::path path = out_dir / kCheckpointFile;
+  const std::filesystem::path tmp = out_dir / (std::string(kCheckpointFile) + ".tmp");
+  {
+    std::ofstream out(tmp);
+    out << json.dump(2) << "\n";
+    out.close();
+    if (!out) throw EnvironmentError(fmt::format("cannot write {}", tmp.string()));
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) throw EnvironmentError(fmt::format("cannot write {}: {}", path.string(), ec.message()));
+}
+
+std::optional<ResumeCheckpoint> ReadCheckpoint(const std::filesystem::path& out_dir) {
+  const std::filesystem::path path = out_dir / kCheckpointFile;
+  std::ifstream in(path);
+  if (!in) return std::nullopt;
+  try {
+    const nlohmann::json json = nlohmann::json::parse(in);
+    ResumeCheckpoint c;
+    c.next_submap_id = json.at("next_submap_id").get<std::uint32_t>();
+    c.resume_frame = json.at("resume_frame").get<std::int64_t>();
+    c.focal = json.at("focal_px").get<double>();
+    c.input = json.at("input").get<std::string>();
+    c.processing_width = json.at("processing_size").at(0).get<int>();
+    c.processing_height = json.at("processing_size").at(1).get<int>();
+    if (c.resume_frame < 0 || !(c.focal > 0)) throw InputError("values out of range");
+    return c;
+  } catch (const std::exception& e) {
+    throw InputError(fmt::format("{}: not a valid checkpoint ({})", path.string(), e.what()));
+  }
+}
+
+}  // namespace glam

@@ -1,0 +1,34 @@
+// Where an interrupted mapping run continues (MappingOptions::resume). Rewritten atomically
+// after every completed submap as `checkpoint.json` in the run's out_dir, next to the
+// persisted submaps it refers to: the next submap id, the first input frame the open submap
+// needs (the start of the 10 % overlap, or the frame after a tracking loss) and the focal
+// estimate so far. Everything before that frame lives in submaps/<id>/ already, so a server
+// killed mid-job loses at most the work on one open submap.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+
+namespace glam {
+
+struct ResumeCheckpoint {
+  std::uint32_t next_submap_id = 0;
+  std::int64_t resume_frame = 0;  // input frame index (FrameSource::SeekTo)
+  double focal = 0;               // processing pixels
+  // What the checkpoint belongs to: a different input or processing size cannot resume.
+  std::string input;
+  int processing_width = 0;
+  int processing_height = 0;
+};
+
+inline constexpr char kCheckpointFile[] = "checkpoint.json";
+
+// Atomic (temporary file + rename). Throws EnvironmentError.
+void WriteCheckpoint(const std::filesystem::path& out_dir, const ResumeCheckpoint& checkpoint);
+
+// nullopt when there is none; InputError when it exists but cannot be parsed.
+std::optional<ResumeCheckpoint> ReadCheckpoint(const std::filesystem::path& out_dir);
+
+}  // namespace glam
