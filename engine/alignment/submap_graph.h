@@ -80,6 +80,9 @@ struct SubmapGraphOptions {
   // chain ATE 7.75 m): loop ATE 0.65 m at lambda 0, 0.68 m at 0.1, 1.05 m at 0.3, 2.7 m at 1
   // (no longer the 3x). 0.1 keeps 95 % of the correction.
   double scale_prior_weight = 0.1;
+  // Fastest in bench/submap_graph_bench.cc (add + optimise one submap at N = 200 submaps,
+  // 112k landmarks, CPU time): SPARSE_SCHUR 1.4 s, SPARSE_NORMAL_CHOLESKY 2.8 s (and 1.8x the
+  // memory), ITERATIVE_SCHUR 5.5 s, CGNR did not converge in 50 iterations (159 s).
   GraphLinearSolver linear_solver = GraphLinearSolver::kSparseSchur;
   int max_iterations = 50;
   double function_tolerance = 1e-6;
