@@ -1,0 +1,208 @@
+#include "api/job_json.h"
+
+#include <ctime>
+#include <set>
+
+#include <fmt/format.h>
+
+#include "engine/core/error.h"
+
+namespace glam::api {
+namespace {
+
+using nlohmann::json;
+
+int GetInt(const json& j, const char* key) {
+  if (!j.is_number_integer()) {
+    throw InputError(fmt::format("options.{} must be an integer, got {}", key, j.dump()));
+  }
+  const auto v = j.get<long long>();
+  if (v < -1000000000LL || v > 1000000000LL) {
+    throw InputError(fmt::format("options.{} is out of range: {}", key, v));
+  }
+  return static_cast<int>(v);
+}
+
+double GetNumber(const json& j, const char* key) {
+  if (!j.is_number()) {
+    throw InputError(fmt::format("options.{} must be a number, got {}", key, j.dump()));
+  }
+  return j.get<double>();
+}
+
+Intrinsics ParseIntrinsics(const json& j) {
+  if (!j.is_object()) {
+    throw InputError(fmt::format("options.intrinsics must be an object, got {}", j.dump()));
+  }
+  static const std::set<std::string> kKnown = {"model", "width", "height", "fx", "fy",
+                                               "cx",    "cy",    "k1",     "k2"};
+  for (const auto& [key, value] : j.items()) {
+    if (kKnown.count(key) == 0) {
+      throw InputError(fmt::format("options.intrinsics: unknown field \"{}\"", key));
+    }
+  }
+  auto required = [&](const char* key) -> const json& {
+    const auto it = j.find(key);
+    if (it == j.end()) {
+      throw InputError(fmt::format("options.intrinsics: missing field \"{}\"", key));
+    }
+    return *it;
+  };
+  Intrinsics k;
+  const json& model = required("model");
+  if (!model.is_string()) throw InputError("options.intrinsics.model must be a string");
+  k.model = model.get<std::string>();
+  k.width = GetInt(required("width"), "intrinsics.width");
+  k.height = GetInt(required("height"), "intrinsics.height");
+  k.fx = GetNumber(required("fx"), "intrinsics.fx");
+  k.fy = GetNumber(required("fy"), "intrinsics.fy");
+  k.cx = GetNumber(required("cx"), "intrinsics.cx");
+  k.cy = GetNumber(required("cy"), "intrinsics.cy");
+  if (j.contains("k1")) k.k1 = GetNumber(j["k1"], "intrinsics.k1");
+  if (j.contains("k2")) k.k2 = GetNumber(j["k2"], "intrinsics.k2");
+  k.Check();
+  return k;
+}
+
+}  // namespace
+
+JobOptions ParseJobOptions(const json& j) {
+  if (!j.is_object()) throw InputError(fmt::format("options must be a JSON object, got {}", j.dump()));
+  JobOptions o;
+  for (const auto& [key, value] : j.items()) {
+    if (value.is_null()) continue;
+    if (key == "name") {
+      if (!value.is_string()) throw InputError("options.name must be a string");
+      o.name = value.get<std::string>();
+      if (o.name.size() > 200) throw InputError("options.name is longer than 200 characters");
+    } else if (key == "stride") {
+      o.stride = GetInt(value, "stride");
+    } else if (key == "focal") {
+      o.focal = GetNumber(value, "focal");
+      if (!(*o.focal > 0)) throw InputError(fmt::format("options.focal must be > 0, got {}", *o.focal));
+    } else if (key == "intrinsics") {
+      o.intrinsics = ParseIntrinsics(value);
+    } else if (key == "keyframes_per_submap") {
+      o.keyframes_per_submap = GetInt(value, "keyframes_per_submap");
+    } else if (key == "max_image_size") {
+      o.max_image_size = GetInt(value, "max_image_size");
+    } else {
+      throw InputError(fmt::format(
+          "options: unknown key \"{}\" (known: name, stride, focal, intrinsics, "
+          "keyframes_per_submap, max_image_size)",
+          key));
+    }
+  }
+  ToMappingOptions(o);  // range checks of the engine
+  return o;
+}
+
+JobOptions ParseJobOptionsText(const std::string& text) {
+  json j;
+  try {
+    j = json::parse(text);
+  } catch (const json::parse_error& e) {
+    throw InputError(fmt::format("options: malformed JSON: {}", e.what()));
+  }
+  return ParseJobOptions(j);
+}
+
+json ToJson(const JobOptions& o) {
+  json j = json::object();
+  if (!o.name.empty()) j["name"] = o.name;
+  if (o.stride) j["stride"] = *o.stride;
+  if (o.focal) j["focal"] = *o.focal;
+  if (o.intrinsics) {
+    const Intrinsics& k = *o.intrinsics;
+    j["intrinsics"] = {{"model", k.model}, {"width", k.width}, {"height", k.height},
+                       {"fx", k.fx},       {"fy", k.fy},       {"cx", k.cx},
+                       {"cy", k.cy},       {"k1", k.k1},       {"k2", k.k2}};
+  }
+  if (o.keyframes_per_submap) j["keyframes_per_submap"] = *o.keyframes_per_submap;
+  if (o.max_image_size) j["max_image_size"] = *o.max_image_size;
+  return j;
+}
+
+MappingOptions ToMappingOptions(const JobOptions& o) {
+  MappingOptions m;
+  if (o.stride) m.source.stride = *o.stride;
+  if (o.max_image_size) m.source.max_image_size = *o.max_image_size;
+  if (o.intrinsics) {
+    m.intrinsics = *o.intrinsics;
+    // As in `glam map --intrinsics`: a given calibration is trusted.
+    m.submap.bundle_adjustment.refine_focal = false;
+  }
+  if (o.focal) m.focal_px = *o.focal;
+  if (o.keyframes_per_submap) m.submap.keyframes_per_submap = *o.keyframes_per_submap;
+  m.Check();
+  return m;
+}
+
+json ProgressToJson(const MappingProgress& p) {
+  return {{"stage", p.stage},
+          {"frames_done", p.frames_done},
+          {"frames_total", p.frames_total},
+          {"fps", p.fps},
+          {"eta_s", p.eta_s},
+          {"submaps_completed", p.submaps_completed},
+          {"submaps_aligned", p.submaps_aligned},
+          {"keyframes", p.keyframes},
+          {"points", p.points},
+          {"revision", p.revision}};
+}
+
+MappingProgress ProgressFromJson(const json& j) {
+  MappingProgress p;
+  if (!j.is_object()) return p;
+  p.stage = j.value("stage", p.stage);
+  p.frames_done = j.value("frames_done", p.frames_done);
+  p.frames_total = j.value("frames_total", p.frames_total);
+  p.fps = j.value("fps", p.fps);
+  p.eta_s = j.value("eta_s", p.eta_s);
+  p.submaps_completed = j.value("submaps_completed", p.submaps_completed);
+  p.submaps_aligned = j.value("submaps_aligned", p.submaps_aligned);
+  p.keyframes = j.value("keyframes", p.keyframes);
+  p.points = j.value("points", p.points);
+  p.revision = j.value("revision", p.revision);
+  return p;
+}
+
+std::string FormatTimestamp(std::int64_t epoch_ms) {
+  const std::time_t seconds = static_cast<std::time_t>(epoch_ms / 1000);
+  std::tm tm{};
+  gmtime_r(&seconds, &tm);
+  return fmt::format("{:04}-{:02}-{:02}T{:02}:{:02}:{:02}.{:03}Z", tm.tm_year + 1900, tm.tm_mon + 1,
+                     tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec, epoch_ms % 1000);
+}
+
+json JobToJson(const Job& job, const std::string& api_base) {
+  const std::string base = api_base + "/jobs/" + job.id;
+  json urls = {{"self", base},
+               {"events", base + "/events"},
+               {"cancel", base + "/cancel"},
+               {"restart", base + "/restart"},
+               {"trajectory", base + "/trajectory.tum"},
+               {"points", base + "/points.ply"},
+               {"report", base + "/report.json"},
+               {"graph", base + "/graph.json"},
+               {"tileset", base + "/tileset.json"},
+               {"map_glb", base + "/map.glb"},
+               {"viewer", "/?job=" + job.id}};
+  return {{"id", job.id},
+          {"name", job.name},
+          {"state", std::string(ToString(job.state))},
+          {"error", job.error ? json(*job.error) : json(nullptr)},
+          {"created_at", FormatTimestamp(job.created_ms)},
+          {"updated_at", FormatTimestamp(job.updated_ms)},
+          {"urls", urls},
+          {"progress", ProgressToJson(job.progress)},
+          {"options", job.options},
+          {"input", job.input_info},
+          {"warnings", job.warnings}};
+}
+
+json ErrorJson(const std::string& code, const std::string& message) {
+  return {{"error", {{"code", code}, {"message", message}}}};
+}
+
+}  // namespace glam::api

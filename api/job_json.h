@@ -1,0 +1,54 @@
+// DTOs <-> JSON for the REST API: the job JSON of docs/architecture.md (Contracts), the
+// progress object, and the options a client may send with an upload. Everything a client
+// sends is validated here, with messages that name the offending field (they become HTTP 400
+// bodies verbatim).
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "api/job.h"
+#include "engine/core/camera.h"
+#include "engine/pipeline/mapping_options.h"
+#include "engine/pipeline/progress.h"
+
+namespace glam::api {
+
+// What a client may set per job. Unset fields keep the engine defaults.
+struct JobOptions {
+  std::string name;                         // display name; default: the upload's file name
+  std::optional<int> stride;                // use every N-th frame
+  std::optional<double> focal;              // focal length in pixels at original resolution
+  std::optional<Intrinsics> intrinsics;     // full calibration (intrinsics.json format)
+  std::optional<int> keyframes_per_submap;  // submap size
+  std::optional<int> max_image_size;        // processing long side (px), 0 = no downscale
+};
+
+// Accepts an object with the keys name, stride, focal, intrinsics, keyframes_per_submap,
+// max_image_size (all optional). Throws InputError naming the key for unknown keys, wrong
+// types or out-of-range values (the resulting MappingOptions are Check()ed as well).
+JobOptions ParseJobOptions(const nlohmann::json& j);
+// Parses text as JSON first (InputError "options: malformed JSON ...").
+JobOptions ParseJobOptionsText(const std::string& text);
+nlohmann::json ToJson(const JobOptions& options);
+
+// Engine options for a job (defaults + the job's options). Throws InputError.
+MappingOptions ToMappingOptions(const JobOptions& options);
+
+nlohmann::json ProgressToJson(const MappingProgress& progress);
+// Lenient: missing fields keep their defaults (the store wrote the JSON itself).
+MappingProgress ProgressFromJson(const nlohmann::json& j);
+
+// RFC 3339 UTC with milliseconds, e.g. "2026-11-23T22:57:33.120Z".
+std::string FormatTimestamp(std::int64_t epoch_ms);
+
+// The job JSON. `api_base` is the path prefix of the REST API ("/api/v1"); urls are
+// absolute paths under it.
+nlohmann::json JobToJson(const Job& job, const std::string& api_base = "/api/v1");
+
+// {"error": {"code": code, "message": message}}
+nlohmann::json ErrorJson(const std::string& code, const std::string& message);
+
+}  // namespace glam::api

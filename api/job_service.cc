@@ -1,0 +1,492 @@
+#include "api/job_service.h"
+
+#include <algorithm>
+#include <cctype>
+#include <random>
+#include <system_error>
+
+#include <fmt/format.h>
+
+#include "api/api_error.h"
+#include "api/ids.h"
+#include "engine/core/error.h"
+#include "engine/core/logging.h"
+#include "engine/video/frame_source.h"
+
+namespace glam::api {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+MappingReport RunMappingExecutor(const Job& job, const fs::path& job_dir,
+                                 const MappingOptions& options, const ProgressCallback& progress,
+                                 const CancellationToken& cancel) {
+  return RunMapping(job_dir / job.input_file, job_dir, options, progress, cancel);
+}
+
+json ProbeWithEngine(const fs::path& file) {
+  const FrameSourceInfo info = ProbeVideo(file);
+  constexpr int kMinSide = 16;
+  constexpr int kMaxSide = 16384;
+  const int w = info.original_size.width;
+  const int h = info.original_size.height;
+  if (w < kMinSide || h < kMinSide || w > kMaxSide || h > kMaxSide) {
+    throw InputError(fmt::format("video size {}x{} is outside {}..{} pixels", w, h, kMinSide, kMaxSide));
+  }
+  return {{"width", w}, {"height", h}, {"fps", info.fps}, {"frame_count", info.frame_count}};
+}
+
+// "clip.MP4" -> "mp4"; anything odd -> "video" (FFmpeg detects containers by content).
+std::string SafeExtension(const std::string& original_name) {
+  const auto dot = original_name.find_last_of('.');
+  if (dot == std::string::npos) return "video";
+  std::string ext = original_name.substr(dot + 1);
+  if (ext.empty() || ext.size() > 5) return "video";
+  for (char& c : ext) {
+    if (!std::isalnum(static_cast<unsigned char>(c))) return "video";
+    c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  }
+  return ext;
+}
+
+std::string DisplayName(const std::string& original_name) {
+  const auto slash = original_name.find_last_of("/\\");
+  std::string name = slash == std::string::npos ? original_name : original_name.substr(slash + 1);
+  if (name.size() > 200) name.resize(200);
+  return name.empty() ? "upload" : name;
+}
+
+void RemoveQuietly(const fs::path& path) {
+  std::error_code ec;
+  fs::remove_all(path, ec);
+  if (ec) GLAM_LOG_WARN("cannot remove {}: {}", path.string(), ec.message());
+}
+
+}  // namespace
+
+JobService::JobService(JobServiceOptions options) : options_(std::move(options)) {
+  if (!options_.executor) options_.executor = RunMappingExecutor;
+  if (!options_.probe) options_.probe = ProbeWithEngine;
+  std::error_code ec;
+  fs::create_directories(options_.data_dir / "jobs", ec);
+  if (!ec) fs::create_directories(options_.data_dir / "uploads", ec);
+  if (ec) {
+    throw EnvironmentError(fmt::format("cannot create data directory {}: {}",
+                                       options_.data_dir.string(), ec.message()));
+  }
+  store_ = std::make_unique<JobStore>(options_.data_dir / "glam.db");
+  Recover();
+  runner_ = std::make_unique<JobRunner>(
+      options_.concurrent_jobs,
+      [this](const std::string& id, const CancellationToken& cancel) { RunJob(id, cancel); });
+  for (const Job& job : store_->ListInState(JobState::kQueued)) runner_->Enqueue(job.id);
+}
+
+JobService::~JobService() { Shutdown(); }
+
+void JobService::Recover() {
+  // Uploads that were still being received when the process stopped are incomplete.
+  for (const auto& entry : fs::directory_iterator(options_.data_dir / "uploads")) {
+    GLAM_LOG_INFO("removing incomplete upload {}", entry.path().string());
+    RemoveQuietly(entry.path());
+  }
+  // A job directory without a row: the process stopped between moving the upload and
+  // inserting the job, so the client never got a 201.
+  for (const auto& entry : fs::directory_iterator(options_.data_dir / "jobs")) {
+    const std::string name = entry.path().filename().string();
+    if (!IsValidJobId(name) || !store_->Get(name)) {
+      GLAM_LOG_INFO("removing orphaned job directory {}", entry.path().string());
+      RemoveQuietly(entry.path());
+    }
+  }
+  std::lock_guard lock(mutex_);
+  for (Job job : store_->ListInState(JobState::kRunning)) {
+    GLAM_LOG_INFO("job {} was interrupted; queued again to resume", job.id);
+    job.resume = true;
+    SetStateLocked(job, JobState::kQueued, std::nullopt, "resumed after restart");
+  }
+}
+
+fs::path JobService::JobDir(const std::string& id) const {
+  GLAM_CHECK(IsValidJobId(id), "job id {} reached the file system unvalidated", id);
+  return options_.data_dir / "jobs" / id;
+}
+
+fs::path JobService::NewUploadPath() const {
+  return options_.data_dir / "uploads" / (NewJobId() + ".part");
+}
+
+void JobService::CheckCanQueue() const {
+  if (shutting_down()) throw ApiError(503, "shutting_down", "the server is shutting down");
+  const auto counts = store_->CountByState();
+  if (counts.at(JobState::kQueued) >= options_.max_queued_jobs) {
+    throw ApiError(503, "queue_full",
+                   fmt::format("{} jobs are already queued (limit {}); try again later",
+                               counts.at(JobState::kQueued), options_.max_queued_jobs));
+  }
+}
+
+Job JobService::CreateJob(const fs::path& upload, const std::string& original_name,
+                          const JobOptions& job_options) {
+  json input_info;
+  try {
+    CheckCanQueue();
+    input_info = options_.probe(upload);
+  } catch (const InputError& e) {
+    RemoveQuietly(upload);
+    throw ApiError(422, "unsupported_video", fmt::format("not a decodable video: {}", e.what()));
+  } catch (...) {
+    RemoveQuietly(upload);
+    throw;
+  }
+  std::error_code ec;
+  input_info["filename"] = DisplayName(original_name);
+  input_info["size_bytes"] = static_cast<std::int64_t>(fs::file_size(upload, ec));
+
+  Job job;
+  do {
+    job.id = NewJobId();
+  } while (fs::exists(JobDir(job.id)) || store_->Get(job.id));
+  job.name = job_options.name.empty() ? DisplayName(original_name) : job_options.name;
+  job.state = JobState::kQueued;
+  job.created_ms = job.updated_ms = NowMs();
+  job.options = ToJson(job_options);
+  job.input_file = "input." + SafeExtension(original_name);
+  job.input_info = input_info;
+  job.progress.stage = "queued";
+
+  const fs::path dir = JobDir(job.id);
+  fs::create_directories(dir, ec);
+  if (!ec) fs::rename(upload, dir / job.input_file, ec);
+  if (ec) {
+    RemoveQuietly(upload);
+    RemoveQuietly(dir);
+    throw EnvironmentError(fmt::format("cannot store the upload: {}", ec.message()));
+  }
+  {
+    std::lock_guard lock(mutex_);
+    store_->Insert(job);
+    EmitLocked(job, "state", {{"state", "queued"}, {"error", nullptr}});
+  }
+  runner_->Enqueue(job.id);
+  GLAM_LOG_INFO("job {} created ({}, {} bytes)", job.id, job.name,
+                input_info["size_bytes"].get<std::int64_t>());
+  return Get(job.id);
+}
+
+Job JobService::GetLocked(const std::string& id) const {
+  if (!IsValidJobId(id)) {
+    throw ApiError(400, "invalid_id", "job ids are 16 lower-case hexadecimal characters");
+  }
+  std::optional<Job> job = store_->Get(id);
+  if (!job) throw ApiError(404, "not_found", fmt::format("no job with id {}", id));
+  return *job;
+}
+
+Job JobService::Get(const std::string& id) const { return GetLocked(id); }
+
+JobPage JobService::List(int limit, int offset) const {
+  if (limit < 1 || limit > 1000) throw ApiError(400, "bad_request", "limit must be in 1..1000");
+  if (offset < 0) throw ApiError(400, "bad_request", "offset must be >= 0");
+  return JobPage{store_->List(limit, offset), store_->Count()};
+}
+
+JobEvent JobService::EmitLocked(Job& job, const std::string& type, json data) {
+  JobEvent event{job.last_event_id + 1, type, std::move(data)};
+  job.last_event_id = event.id;
+  if (type == "progress") {
+    store_->Update(job);
+    live_[job.id].latest_progress = event;
+  } else {
+    store_->AppendEvent(job.id, event);
+  }
+  events_changed_.notify_all();
+  return event;
+}
+
+void JobService::SetStateLocked(Job& job, JobState state, std::optional<std::string> error,
+                                const std::string& reason) {
+  job.state = state;
+  job.error = std::move(error);
+  job.updated_ms = NowMs();
+  store_->Update(job);
+  json data = {{"state", std::string(ToString(state))},
+               {"error", job.error ? json(*job.error) : json(nullptr)}};
+  if (!reason.empty()) data["reason"] = reason;
+  EmitLocked(job, "state", std::move(data));
+}
+
+Job JobService::Cancel(const std::string& id, std::chrono::milliseconds wait) {
+  {
+    std::lock_guard lock(mutex_);
+    Job job = GetLocked(id);
+    if (IsTerminal(job.state)) {
+      throw ApiError(409, "invalid_state",
+                     fmt::format("job {} is {}; only queued or running jobs can be canceled", id,
+                                 ToString(job.state)));
+    }
+    if (runner_->RemoveQueued(id) || job.state == JobState::kQueued) {
+      job.progress.stage = "canceled";
+      SetStateLocked(job, JobState::kCanceled, std::nullopt, "canceled by request");
+      return job;
+    }
+    runner_->CancelRunning(id);
+  }
+  runner_->WaitUntilIdle(id, wait);
+  return Get(id);
+}
+
+void JobService::RemoveOutputs(const Job& job) const {
+  const fs::path dir = JobDir(job.id);
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(dir, ec)) {
+    if (entry.path().filename() != job.input_file) RemoveQuietly(entry.path());
+  }
+}
+
+Job JobService::Restart(const std::string& id) {
+  CheckCanQueue();
+  std::lock_guard lock(mutex_);
+  Job job = GetLocked(id);
+  if (!IsTerminal(job.state)) {
+    throw ApiError(409, "invalid_state",
+                   fmt::format("job {} is {}; only completed, failed or canceled jobs can be "
+                               "restarted",
+                               id, ToString(job.state)));
+  }
+  RemoveOutputs(job);
+  job.progress = MappingProgress{};
+  job.progress.stage = "queued";
+  job.warnings.clear();
+  job.resume = false;
+  SetStateLocked(job, JobState::kQueued, std::nullopt, "restarted by request");
+  runner_->Enqueue(id);
+  return job;
+}
+
+void JobService::Delete(const std::string& id) {
+  {
+    std::lock_guard lock(mutex_);
+    GetLocked(id);
+    deleting_.insert(id);
+    runner_->RemoveQueued(id);
+    runner_->CancelRunning(id);
+  }
+  runner_->WaitUntilIdle(id, std::chrono::seconds(60));
+  {
+    std::lock_guard lock(mutex_);
+    store_->Remove(id);
+    live_.erase(id);
+    deleting_.erase(id);
+    events_changed_.notify_all();
+  }
+  RemoveQuietly(JobDir(id));
+  GLAM_LOG_INFO("job {} deleted", id);
+}
+
+fs::path JobService::ResultFile(const std::string& id, const std::string& name) const {
+  const Job job = Get(id);
+  static const std::set<std::string> kWholeMap = {"trajectory.tum", "points.ply", "report.json",
+                                                  "graph.json"};
+  const fs::path dir = JobDir(id);
+  if (kWholeMap.count(name) != 0) {
+    if (job.state != JobState::kCompleted) {
+      throw ApiError(409, "not_ready",
+                     fmt::format("{} is produced when the job completes; job {} is {}", name, id,
+                                 ToString(job.state)));
+    }
+    const fs::path path = dir / name;
+    if (!fs::is_regular_file(path)) {
+      throw ApiError(404, "not_found", fmt::format("job {} has no {}", id, name));
+    }
+    return path;
+  }
+  fs::path path;
+  if (name == "tileset.json" || name == "map.glb") {
+    path = dir / name;
+  } else if (name.rfind("tiles/", 0) == 0 && name.size() > 10 &&
+             name.compare(name.size() - 4, 4, ".glb") == 0) {
+    long long submap = 0;
+    if (!ParseNonNegativeInt(std::string_view(name).substr(6, name.size() - 10), &submap)) {
+      throw ApiError(400, "bad_request", "tile names are tiles/<submap number>.glb");
+    }
+    path = dir / "tiles" / fmt::format("{}.glb", submap);
+  } else {
+    throw ApiError(404, "not_found", fmt::format("unknown result file {}", name));
+  }
+  if (!fs::is_regular_file(path)) {
+    throw ApiError(404, "not_available",
+                   fmt::format("{} is not available for job {}: map tiles are not produced by "
+                               "this server version yet",
+                               name, id));
+  }
+  return path;
+}
+
+EventBatch JobService::WaitForEvents(const std::string& id, std::int64_t after_id,
+                                     std::chrono::milliseconds timeout) const {
+  std::unique_lock lock(mutex_);
+  EventBatch batch;
+  auto collect = [&]() -> bool {
+    if (shutting_down_) {
+      batch.gone = true;
+      return true;
+    }
+    std::optional<Job> job = store_->Get(id);
+    if (!job || deleting_.count(id) != 0) {
+      batch.gone = true;
+      return true;
+    }
+    batch.events = store_->EventsAfter(id, after_id);
+    const auto live = live_.find(id);
+    if (live != live_.end() && live->second.latest_progress &&
+        live->second.latest_progress->id > after_id) {
+      const JobEvent& progress = *live->second.latest_progress;
+      const auto pos = std::lower_bound(
+          batch.events.begin(), batch.events.end(), progress.id,
+          [](const JobEvent& e, std::int64_t v) { return e.id < v; });
+      batch.events.insert(pos, progress);
+    }
+    const std::int64_t last_seen = batch.events.empty() ? after_id : batch.events.back().id;
+    batch.finished = IsTerminal(job->state) && last_seen >= store_->MaxEventId(id);
+    return !batch.events.empty() || batch.finished;
+  };
+  events_changed_.wait_for(lock, timeout, collect);
+  return batch;
+}
+
+ServiceStats JobService::Stats() const {
+  ServiceStats stats;
+  stats.jobs_by_state = store_->CountByState();
+  {
+    std::lock_guard lock(mutex_);
+    stats.frames_processed_total = frames_processed_total_;
+  }
+  stats.queued_in_runner = runner_->queued();
+  stats.running_in_runner = runner_->running();
+  return stats;
+}
+
+void JobService::Shutdown() {
+  {
+    std::lock_guard lock(mutex_);
+    if (shutting_down_) return;
+    shutting_down_ = true;
+    events_changed_.notify_all();
+  }
+  if (runner_) runner_->Shutdown();
+}
+
+bool JobService::shutting_down() const {
+  std::lock_guard lock(mutex_);
+  return shutting_down_;
+}
+
+void JobService::RunJob(const std::string& id, const CancellationToken& cancel) {
+  Job job;
+  MappingOptions mapping_options;
+  {
+    std::lock_guard lock(mutex_);
+    std::optional<Job> stored = store_->Get(id);
+    if (!stored || stored->state != JobState::kQueued || deleting_.count(id) != 0) return;
+    job = *stored;
+    live_[id] = Live{};
+    job.progress = MappingProgress{};
+    job.progress.stage = "starting";
+    job.warnings.clear();
+    try {
+      mapping_options = ToMappingOptions(ParseJobOptions(job.options));
+    } catch (const std::exception& e) {
+      SetStateLocked(job, JobState::kFailed, fmt::format("invalid job options: {}", e.what()));
+      live_.erase(id);
+      return;
+    }
+    mapping_options.resume = job.resume;
+    SetStateLocked(job, JobState::kRunning, std::nullopt, job.resume ? "resuming" : "");
+  }
+  GLAM_LOG_INFO("job {}: mapping started{}", id, job.resume ? " (resume)" : "");
+
+  MappingReport report;
+  JobState final_state = JobState::kCompleted;
+  std::optional<std::string> error;
+  bool interrupted = false;
+  try {
+    report = options_.executor(
+        job, JobDir(id), mapping_options,
+        [this, &id](const MappingProgress& p) { OnProgress(id, p); }, cancel);
+  } catch (const Cancelled&) {
+    if (runner_->shutting_down()) {
+      interrupted = true;
+    } else {
+      final_state = JobState::kCanceled;
+    }
+  } catch (const InputError& e) {
+    final_state = JobState::kFailed;
+    error = e.what();
+  } catch (const std::exception& e) {
+    final_state = JobState::kFailed;
+    error = fmt::format("mapping failed: {}", e.what());
+  }
+
+  std::lock_guard lock(mutex_);
+  std::optional<Job> stored = store_->Get(id);
+  if (!stored) {
+    live_.erase(id);
+    return;
+  }
+  job = *stored;
+  if (interrupted) {
+    // Stays `running`: the next start re-queues it with resume (Recover()).
+    job.resume = true;
+    store_->Update(job);
+    GLAM_LOG_INFO("job {}: interrupted by shutdown; it resumes on the next start", id);
+    live_.erase(id);
+    return;
+  }
+  const auto live = live_.find(id);
+  if (live != live_.end()) job.progress = live->second.last;
+  job.progress.stage = std::string(ToString(final_state));
+  if (final_state == JobState::kCompleted) {
+    job.progress.eta_s = 0;
+    job.warnings = report.warnings;
+  }
+  job.resume = false;
+  EmitLocked(job, "progress", ProgressToJson(job.progress));
+  SetStateLocked(job, final_state, error);
+  live_.erase(id);
+  GLAM_LOG_INFO("job {}: {}{}", id, ToString(final_state), error ? ": " + *error : "");
+}
+
+void JobService::OnProgress(const std::string& id, const MappingProgress& progress) {
+  try {
+    std::lock_guard lock(mutex_);
+    Live& live = live_[id];
+    std::optional<Job> stored = store_->Get(id);
+    if (!stored) return;
+    Job& job = *stored;
+    if (progress.frames_done > live.last.frames_done) {
+      frames_processed_total_ += progress.frames_done - live.last.frames_done;
+    }
+    for (std::int64_t s = live.last.submaps_completed; s < progress.submaps_completed; ++s) {
+      EmitLocked(job, "submap", {{"submap_id", s}, {"revision", progress.revision}});
+    }
+    if (progress.revision > live.last.revision) {
+      EmitLocked(job, "revision", {{"revision", progress.revision}});
+    }
+    const bool stage_changed = progress.stage != live.last.stage;
+    live.last = progress;
+    job.progress = progress;
+    const std::int64_t now = NowMs();
+    if (stage_changed || now - live.last_progress_ms >= options_.progress_interval.count()) {
+      live.last_progress_ms = now;
+      job.updated_ms = now;
+      EmitLocked(job, "progress", ProgressToJson(progress));
+    }
+  } catch (const std::exception& e) {
+    // The engine's callback must not throw; a store failure here only loses a progress update.
+    GLAM_LOG_WARN("job {}: progress update failed: {}", id, e.what());
+  }
+}
+
+}  // namespace glam::api

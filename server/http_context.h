@@ -1,0 +1,52 @@
+// Internal to server/: what every HTTP handler shares, and the handler entry points that
+// http_server.cc wires into the route table. Handlers throw api::ApiError (or InputError) for
+// client errors; the route wrapper turns them into JSON error bodies.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <string>
+
+// Engine headers (Eigen) must come before httplib.h: it pulls in <resolv.h>, whose macros
+// break Eigen's product kernels when Eigen is parsed afterwards.
+#include "api/job_service.h"
+#include "server/http_metrics.h"
+#include "server/http_server.h"
+
+#include <httplib.h>
+#include <nlohmann/json.hpp>
+
+namespace glam::server {
+
+struct HttpServer::Context {
+  Context(api::JobService& s, HttpServerOptions o) : service(s), options(std::move(o)) {}
+  api::JobService& service;
+  HttpServerOptions options;
+  HttpMetrics metrics;
+  std::atomic<int> sse_clients{0};
+  std::atomic<int> uploads_in_progress{0};
+  std::chrono::steady_clock::time_point started = std::chrono::steady_clock::now();
+};
+using Context = HttpServer::Context;
+
+void SendJson(httplib::Response& res, int status, const nlohmann::json& body);
+void SendError(httplib::Response& res, int status, const std::string& code,
+               const std::string& message);
+// The job id captured by the route regex (validated by the service).
+std::string JobIdParam(const httplib::Request& req);
+
+// Reads and discards the rest of a rejected request body (up to 64 MiB, else the connection
+// is closed) so that a client that sends the whole body before reading sees the status.
+void DrainRejectedBody(const httplib::Request& req, httplib::Response& res,
+                       const httplib::ContentReader& reader);
+
+// POST /api/v1/jobs (multipart/form-data or a raw video body).
+void HandleCreateJob(Context& ctx, const httplib::Request& req, httplib::Response& res,
+                     const httplib::ContentReader& reader);
+// GET /api/v1/jobs/{id}/events (Server-Sent Events).
+void HandleEvents(Context& ctx, const httplib::Request& req, httplib::Response& res);
+// GET /api/v1/jobs/{id}/<file>: ETag / If-None-Match and Range support.
+void HandleDownload(Context& ctx, const httplib::Request& req, httplib::Response& res,
+                    const std::string& file_name);
+
+}  // namespace glam::server

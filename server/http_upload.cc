@@ -1,0 +1,276 @@
+// POST /api/v1/jobs: the body streams to DIR/uploads/<random>.part in chunks as it arrives
+// (never held in memory), the size limit is enforced while streaming, and only a complete,
+// probed file becomes a job. Every failure path removes the partial file.
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <memory>
+#include <optional>
+
+#include <fmt/format.h>
+
+#include "api/api_error.h"
+#include "api/job_json.h"
+#include "engine/core/error.h"
+#include "engine/core/logging.h"
+#include "server/http_context.h"
+
+namespace glam::server {
+namespace {
+
+namespace fs = std::filesystem;
+using api::ApiError;
+
+constexpr std::size_t kMaxOptionsBytes = 64 * 1024;
+
+// Counts an upload against max_concurrent_uploads for the lifetime of the request.
+class UploadSlot {
+ public:
+  explicit UploadSlot(Context& ctx) : ctx_(ctx) {
+    if (++ctx_.uploads_in_progress > ctx_.options.max_concurrent_uploads) {
+      --ctx_.uploads_in_progress;
+      throw ApiError(503, "too_many_uploads",
+                     fmt::format("{} uploads are already in progress; try again later",
+                                 ctx_.options.max_concurrent_uploads));
+    }
+  }
+  ~UploadSlot() { --ctx_.uploads_in_progress; }
+  UploadSlot(const UploadSlot&) = delete;
+  UploadSlot& operator=(const UploadSlot&) = delete;
+
+ private:
+  Context& ctx_;
+};
+
+// The temporary upload file; removed unless Release()d (ownership passes to the service).
+class TempUpload {
+ public:
+  explicit TempUpload(fs::path path) : path_(std::move(path)) {
+    file_ = std::fopen(path_.c_str(), "wb");
+    if (file_ == nullptr) {
+      throw EnvironmentError(fmt::format("cannot create {}: {}", path_.string(), std::strerror(errno)));
+    }
+  }
+  ~TempUpload() {
+    Close();
+    if (!released_) {
+      std::error_code ec;
+      fs::remove(path_, ec);
+    }
+  }
+  TempUpload(const TempUpload&) = delete;
+  TempUpload& operator=(const TempUpload&) = delete;
+
+  // False on a write error; error_number() tells which.
+  bool Write(const char* data, std::size_t size) {
+    if (std::fwrite(data, 1, size, file_) != size) {
+      write_errno_ = errno;
+      return false;
+    }
+    bytes_ += static_cast<std::int64_t>(size);
+    return true;
+  }
+  bool Close() {
+    if (file_ == nullptr) return write_errno_ == 0;
+    const bool ok = std::fflush(file_) == 0 && ::fsync(fileno(file_)) == 0;
+    if (!ok && write_errno_ == 0) write_errno_ = errno;
+    std::fclose(file_);
+    file_ = nullptr;
+    return ok && write_errno_ == 0;
+  }
+  const fs::path& Release() {
+    released_ = true;
+    return path_;
+  }
+  std::int64_t bytes() const { return bytes_; }
+  int error_number() const { return write_errno_; }
+
+ private:
+  fs::path path_;
+  std::FILE* file_ = nullptr;
+  std::int64_t bytes_ = 0;
+  int write_errno_ = 0;
+  bool released_ = false;
+};
+
+[[noreturn]] void ThrowWriteError(int error_number) {
+  // EFBIG: the process file-size limit (RLIMIT_FSIZE) is a storage limit too.
+  if (error_number == ENOSPC || error_number == EDQUOT || error_number == EFBIG) {
+    throw ApiError(507, "insufficient_storage", "the server's disk is full; the upload was discarded");
+  }
+  throw EnvironmentError(fmt::format("cannot store the upload: {}", std::strerror(error_number)));
+}
+
+std::string ExtensionForContentType(const std::string& type) {
+  if (type == "video/mp4") return "upload.mp4";
+  if (type == "video/quicktime") return "upload.mov";
+  if (type == "video/x-matroska" || type == "video/matroska") return "upload.mkv";
+  if (type == "video/webm") return "upload.webm";
+  if (type == "video/x-msvideo") return "upload.avi";
+  return "upload.video";
+}
+
+// Options of a raw-body upload: X-Glam-Options (JSON) or query parameters.
+api::JobOptions RawBodyOptions(const httplib::Request& req) {
+  if (req.has_header("X-Glam-Options")) {
+    return api::ParseJobOptionsText(req.get_header_value("X-Glam-Options"));
+  }
+  nlohmann::json j = nlohmann::json::object();
+  for (const auto& [key, value] : req.params) {
+    if (key == "token" || key == "filename") continue;
+    if (key == "name") {
+      j[key] = value;
+    } else {
+      try {
+        std::size_t used = 0;
+        if (key == "focal") {
+          j[key] = std::stod(value, &used);
+        } else {
+          j[key] = std::stoll(value, &used);
+        }
+        if (used != value.size()) throw std::invalid_argument(value);
+      } catch (const std::exception&) {
+        throw InputError(fmt::format("query parameter {} must be a number, got \"{}\"", key, value));
+      }
+    }
+  }
+  return api::ParseJobOptions(j);
+}
+
+}  // namespace
+
+void DrainRejectedBody(const httplib::Request& req, httplib::Response& res,
+                       const httplib::ContentReader& reader) {
+  constexpr std::uint64_t kMaxDrain = 64ULL << 20;
+  const auto length = req.get_header_value<std::uint64_t>("Content-Length");
+  res.set_header("Connection", "close");
+  if (length > kMaxDrain) return;
+  if (req.is_multipart_form_data()) {
+    reader([](const httplib::MultipartFormData&) { return true; },
+           [](const char*, std::size_t) { return true; });
+  } else {
+    reader([](const char*, std::size_t) { return true; });
+  }
+}
+
+void HandleCreateJob(Context& ctx, const httplib::Request& req, httplib::Response& res,
+                     const httplib::ContentReader& reader) {
+  const std::string content_type = req.get_header_value("Content-Type");
+  const std::string media_type = content_type.substr(0, content_type.find(';'));
+  const bool multipart = req.is_multipart_form_data();
+  const bool raw = media_type.rfind("video/", 0) == 0 || media_type == "application/octet-stream";
+  try {
+    if (!multipart && !raw) {
+      throw ApiError(415, "unsupported_media_type",
+                     fmt::format("send the video as multipart/form-data (field \"video\") or as a raw "
+                                 "body with a video/* or application/octet-stream content type, not "
+                                 "\"{}\"",
+                                 content_type));
+    }
+    ctx.service.CheckCanQueue();
+    const std::uint64_t declared = req.get_header_value<std::uint64_t>("Content-Length");
+    if (!multipart && declared > static_cast<std::uint64_t>(ctx.options.max_upload_bytes)) {
+      throw ApiError(413, "payload_too_large",
+                     fmt::format("the upload has {} bytes; the limit is {} bytes", declared,
+                                 ctx.options.max_upload_bytes));
+    }
+    std::error_code ec;
+    const fs::space_info space = fs::space(ctx.service.data_dir(), ec);
+    if (!ec && declared > 0 && declared > space.available) {
+      throw ApiError(507, "insufficient_storage",
+                     fmt::format("the upload has {} bytes but only {} bytes are free", declared,
+                                 space.available));
+    }
+  } catch (const ApiError&) {
+    DrainRejectedBody(req, res, reader);
+    throw;
+  }
+  UploadSlot slot(ctx);
+  TempUpload upload(ctx.service.NewUploadPath());
+  bool too_large = false;
+  bool write_failed = false;
+  auto receive = [&](const char* data, std::size_t size) {
+    if (upload.bytes() + static_cast<std::int64_t>(size) > ctx.options.max_upload_bytes) {
+      too_large = true;
+      return false;
+    }
+    if (!upload.Write(data, size)) {
+      write_failed = true;
+      return false;
+    }
+    return true;
+  };
+
+  std::string original_name;
+  api::JobOptions options;
+  bool read_ok = false;
+  if (multipart) {
+    std::string field;
+    std::string options_text;
+    bool have_video = false;
+    bool have_options = false;
+    bool options_too_long = false;
+    read_ok = reader(
+        [&](const httplib::MultipartFormData& part) {
+          field = part.name;
+          if (field == "video") {
+            if (have_video) return false;  // one video per job
+            have_video = true;
+            original_name = part.filename.empty() ? ExtensionForContentType(part.content_type)
+                                                  : part.filename;
+          } else if (field == "options") {
+            have_options = true;
+          }
+          return true;
+        },
+        [&](const char* data, std::size_t size) {
+          if (field == "video") return receive(data, size);
+          if (field == "options") {
+            if (options_text.size() + size > kMaxOptionsBytes) {
+              options_too_long = true;
+              return false;
+            }
+            options_text.append(data, size);
+          }
+          return true;  // other fields are ignored
+        });
+    if (options_too_long) throw ApiError(400, "bad_options", "the options field is larger than 64 KiB");
+    if (read_ok && !have_video) {
+      throw ApiError(400, "missing_video", "multipart upload without a \"video\" field");
+    }
+    if (have_options) options = api::ParseJobOptionsText(options_text);
+  } else {
+    options = RawBodyOptions(req);
+    original_name = req.has_param("filename") ? req.get_param_value("filename")
+                                              : ExtensionForContentType(media_type);
+    read_ok = reader(receive);
+  }
+  if (too_large) {
+    res.set_header("Connection", "close");
+    throw ApiError(413, "payload_too_large",
+                   fmt::format("the upload exceeds the limit of {} bytes", ctx.options.max_upload_bytes));
+  }
+  if (write_failed) {
+    res.set_header("Connection", "close");
+    ThrowWriteError(upload.error_number());
+  }
+  if (!read_ok) {
+    res.set_header("Connection", "close");
+    if (res.status == 413) {
+      throw ApiError(413, "payload_too_large",
+                     fmt::format("the upload exceeds the limit of {} bytes", ctx.options.max_upload_bytes));
+    }
+    throw ApiError(400, "bad_upload", "the request body could not be read completely");
+  }
+  if (!upload.Close()) ThrowWriteError(upload.error_number());
+  if (upload.bytes() == 0) throw ApiError(400, "empty_body", "the uploaded video is empty");
+  GLAM_LOG_DEBUG("upload of {} bytes received", upload.bytes());
+  const api::Job job = ctx.service.CreateJob(upload.Release(), original_name, options);
+  res.set_header("Location", "/api/v1/jobs/" + job.id);
+  SendJson(res, 201, api::JobToJson(job));
+}
+
+}  // namespace glam::server

@@ -1,0 +1,77 @@
+#include "api/job_json.h"
+
+#include <gtest/gtest.h>
+
+#include "engine/core/error.h"
+
+namespace glam::api {
+namespace {
+
+using nlohmann::json;
+
+TEST(JobJson, ParsesOptionsAndMapsThemToEngineOptions) {
+  const JobOptions o = ParseJobOptionsText(R"({"name": "flight 1", "stride": 2, "focal": 900.5,
+      "keyframes_per_submap": 8,
+      "intrinsics": {"model": "pinhole", "width": 640, "height": 360, "fx": 500, "fy": 501,
+                     "cx": 319.5, "cy": 179.5}})");
+  EXPECT_EQ(o.name, "flight 1");
+  ASSERT_TRUE(o.stride && o.focal && o.intrinsics && o.keyframes_per_submap);
+  EXPECT_EQ(*o.stride, 2);
+  EXPECT_DOUBLE_EQ(*o.focal, 900.5);
+  EXPECT_DOUBLE_EQ(o.intrinsics->fy, 501);
+  const MappingOptions m = ToMappingOptions(o);
+  EXPECT_EQ(m.source.stride, 2);
+  EXPECT_EQ(m.submap.keyframes_per_submap, 8);
+  ASSERT_TRUE(m.intrinsics.has_value());
+  EXPECT_DOUBLE_EQ(m.intrinsics->cx, 319.5);
+  // Round trip through the stored JSON.
+  const JobOptions back = ParseJobOptions(ToJson(o));
+  EXPECT_EQ(ToJson(back), ToJson(o));
+}
+
+TEST(JobJson, RejectsBadOptionsWithTheKeyInTheMessage) {
+  auto message = [](const std::string& text) {
+    try {
+      ParseJobOptionsText(text);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_NE(message("{not json").find("malformed JSON"), std::string::npos);
+  EXPECT_NE(message("[1,2]").find("object"), std::string::npos);
+  EXPECT_NE(message(R"({"strid": 2})").find("strid"), std::string::npos);
+  EXPECT_NE(message(R"({"stride": "2"})").find("stride"), std::string::npos);
+  EXPECT_NE(message(R"({"stride": 0})").find("stride"), std::string::npos);
+  EXPECT_NE(message(R"({"focal": -5})").find("focal"), std::string::npos);
+  EXPECT_NE(message(R"({"intrinsics": {"model": "pinhole"}})").find("width"), std::string::npos);
+  EXPECT_EQ(message("{}"), "accepted");
+}
+
+TEST(JobJson, JobJsonHasTheContractFields) {
+  Job job;
+  job.id = "0123456789abcdef";
+  job.name = "clip.mp4";
+  job.state = JobState::kRunning;
+  job.created_ms = 1700000000123;
+  job.updated_ms = 1700000001000;
+  job.progress.frames_done = 12;
+  job.progress.revision = 3;
+  const json j = JobToJson(job);
+  for (const char* key : {"id", "name", "state", "error", "created_at", "updated_at", "urls", "progress"}) {
+    EXPECT_TRUE(j.contains(key)) << key;
+  }
+  EXPECT_EQ(j["state"], "running");
+  EXPECT_TRUE(j["error"].is_null());
+  EXPECT_EQ(j["created_at"], "2023-11-14T22:13:20.123Z");
+  EXPECT_EQ(j["urls"]["trajectory"], "/api/v1/jobs/0123456789abcdef/trajectory.tum");
+  for (const char* key : {"stage", "frames_done", "frames_total", "fps", "eta_s", "submaps_completed",
+                          "submaps_aligned", "keyframes", "points", "revision"}) {
+    EXPECT_TRUE(j["progress"].contains(key)) << key;
+  }
+  EXPECT_EQ(ProgressFromJson(j["progress"]).revision, 3);
+  EXPECT_EQ(ErrorJson("not_found", "x")["error"]["code"], "not_found");
+}
+
+}  // namespace
+}  // namespace glam::api

@@ -1,0 +1,135 @@
+#include "api/job_store.h"
+
+#include <sqlite3.h>
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "api/ids.h"
+#include "engine/core/error.h"
+
+namespace glam::api {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Unique per process (several build trees may run the tests at the same time on one
+// machine); removed when the process exits.
+fs::path FreshDir(const std::string& name) {
+  struct Cleanup {
+    std::vector<fs::path> dirs;
+    ~Cleanup() {
+      for (const fs::path& d : dirs) {
+        std::error_code ec;
+        fs::remove_all(d, ec);
+      }
+    }
+  };
+  static Cleanup cleanup;
+  const fs::path dir =
+      fs::temp_directory_path() / ("glam_api_store_" + name + "_" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  cleanup.dirs.push_back(dir);
+  return dir;
+}
+
+Job MakeJob(std::int64_t created_ms) {
+  Job job;
+  job.id = NewJobId();
+  job.name = "job " + std::to_string(created_ms);
+  job.created_ms = job.updated_ms = created_ms;
+  job.input_file = "input.mp4";
+  job.options = {{"stride", 2}};
+  return job;
+}
+
+TEST(JobStore, PersistsJobsAndEventsAcrossReopen) {
+  const fs::path dir = FreshDir("reopen");
+  Job a = MakeJob(1000);
+  Job b = MakeJob(2000);
+  {
+    JobStore store(dir / "glam.db");
+    store.Insert(a);
+    store.Insert(b);
+    b.state = JobState::kFailed;
+    b.error = "decoder exploded";
+    b.progress.frames_done = 42;
+    b.progress.stage = "mapping";
+    b.warnings = {"too dark"};
+    b.resume = true;
+    EXPECT_TRUE(store.Update(b));
+    store.AppendEvent(a.id, JobEvent{1, "state", {{"state", "queued"}}});
+    store.AppendEvent(a.id, JobEvent{3, "submap", {{"submap_id", 0}}});
+  }
+  JobStore store(dir / "glam.db");
+  EXPECT_EQ(store.Count(), 2);
+  const auto got = store.Get(b.id);
+  ASSERT_TRUE(got.has_value());
+  EXPECT_EQ(got->state, JobState::kFailed);
+  EXPECT_EQ(got->error.value_or(""), "decoder exploded");
+  EXPECT_EQ(got->progress.frames_done, 42);
+  EXPECT_EQ(got->progress.stage, "mapping");
+  ASSERT_EQ(got->warnings.size(), 1u);
+  EXPECT_TRUE(got->resume);
+  EXPECT_EQ(got->options["stride"], 2);
+  EXPECT_FALSE(store.Get(a.id)->error.has_value());
+  EXPECT_EQ(store.Get(a.id)->last_event_id, 3);  // raised by AppendEvent
+  const auto events = store.EventsAfter(a.id, 1);
+  ASSERT_EQ(events.size(), 1u);
+  EXPECT_EQ(events[0].id, 3);
+  EXPECT_EQ(events[0].type, "submap");
+  EXPECT_EQ(store.MaxEventId(a.id), 3);
+  EXPECT_EQ(store.CountByState()[JobState::kQueued], 1);
+  EXPECT_EQ(store.CountByState()[JobState::kFailed], 1);
+  EXPECT_FALSE(store.Get("ffffffffffffffff").has_value());
+}
+
+TEST(JobStore, ListsNewestFirstWithPaging) {
+  JobStore store(FreshDir("list") / "glam.db");
+  std::vector<Job> jobs;
+  for (int i = 0; i < 5; ++i) {
+    jobs.push_back(MakeJob(1000 + i));
+    store.Insert(jobs.back());
+  }
+  const auto page1 = store.List(2, 0);
+  const auto page2 = store.List(2, 2);
+  const auto page3 = store.List(2, 4);
+  ASSERT_EQ(page1.size(), 2u);
+  ASSERT_EQ(page2.size(), 2u);
+  ASSERT_EQ(page3.size(), 1u);
+  EXPECT_EQ(page1[0].id, jobs[4].id);
+  EXPECT_EQ(page1[1].id, jobs[3].id);
+  EXPECT_EQ(page3[0].id, jobs[0].id);
+  const auto queued = store.ListInState(JobState::kQueued);
+  ASSERT_EQ(queued.size(), 5u);
+  EXPECT_EQ(queued.front().id, jobs[0].id);  // queue order: oldest first
+}
+
+TEST(JobStore, RemoveDeletesJobAndEvents) {
+  JobStore store(FreshDir("remove") / "glam.db");
+  Job a = MakeJob(1);
+  store.Insert(a);
+  store.AppendEvent(a.id, JobEvent{1, "state", {}});
+  EXPECT_TRUE(store.Remove(a.id));
+  EXPECT_FALSE(store.Remove(a.id));
+  EXPECT_FALSE(store.Get(a.id).has_value());
+  EXPECT_TRUE(store.EventsAfter(a.id, 0).empty());
+}
+
+TEST(JobStore, RefusesNewerSchemaVersion) {
+  const fs::path db = FreshDir("version") / "glam.db";
+  { JobStore store(db); }
+  sqlite3* raw = nullptr;
+  ASSERT_EQ(sqlite3_open(db.c_str(), &raw), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(raw, "PRAGMA user_version = 99", nullptr, nullptr, nullptr), SQLITE_OK);
+  sqlite3_close(raw);
+  EXPECT_THROW(JobStore store(db), EnvironmentError);
+}
+
+}  // namespace
+}  // namespace glam::api

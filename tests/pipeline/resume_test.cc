@@ -1,0 +1,90 @@
+// A run interrupted after some submaps continues from its checkpoint (MappingOptions::resume):
+// it starts decoding where the open submap began, keeps the persisted submaps (their files are
+// not rewritten), re-aligns them, and ends with a map as accurate as an uninterrupted run.
+#include <filesystem>
+
+#include <gtest/gtest.h>
+
+#include "engine/core/error.h"
+#include "engine/core/intrinsics_io.h"
+#include "engine/map/submap_io.h"
+#include "engine/pipeline/mapping_job.h"
+#include "engine/pipeline/resume_checkpoint.h"
+#include "tools/eval/evaluation.h"
+
+namespace glam {
+namespace {
+
+namespace fs = std::filesystem;
+
+const fs::path kClip = fs::path(GLAM_TEST_FIXTURES_DIR) / "lawnmower_small";
+
+MappingOptions DemoOptions() {
+  MappingOptions options;
+  options.intrinsics = ReadIntrinsicsJson(kClip / "intrinsics.json");
+  options.submap.bundle_adjustment.refine_focal = false;
+  options.submap.keyframes_per_submap = 6;
+  return options;
+}
+
+TEST(ResumeMapping, InterruptedRunContinuesFromItsCheckpointAndIsAccurate) {
+  const fs::path out = fs::temp_directory_path() / "glam_resume_test";
+  fs::remove_all(out);
+
+  // First run: cancelled as soon as two submaps are on disk.
+  CancellationToken cancel;
+  auto stop_after_two = [&](const MappingProgress& p) {
+    if (p.submaps_completed >= 2) cancel.Cancel();
+  };
+  EXPECT_THROW(RunMapping(kClip / "video.mp4", out, DemoOptions(), stop_after_two, cancel), Cancelled);
+  const std::optional<ResumeCheckpoint> checkpoint = ReadCheckpoint(out);
+  ASSERT_TRUE(checkpoint.has_value());
+  EXPECT_GE(checkpoint->next_submap_id, 2u);
+  EXPECT_GT(checkpoint->resume_frame, 0);
+  const fs::file_time_type first_written =
+      fs::last_write_time(SubmapDirectory(out / "submaps", 0) / "submap.bin");
+  const Submap last_before = ReadSubmap(out / "submaps", checkpoint->next_submap_id - 1);
+  // The open submap restarts inside the last one's frames (overlap) or right after them.
+  EXPECT_LE(checkpoint->resume_frame, last_before.last_frame + 1);
+
+  // Second run resumes.
+  MappingOptions options = DemoOptions();
+  options.resume = true;
+  const MappingReport report = RunMapping(kClip / "video.mp4", out, options);
+  EXPECT_EQ(report.resumed_from_frame, checkpoint->resume_frame);
+  EXPECT_GT(report.submaps, static_cast<std::int64_t>(checkpoint->next_submap_id));
+  EXPECT_EQ(report.disconnected_submaps, 0);
+  EXPECT_EQ(fs::last_write_time(SubmapDirectory(out / "submaps", 0) / "submap.bin"), first_written);
+
+  // As accurate as the same run without the interruption (the resumed submap restarts where
+  // the uninterrupted one would have started it, so the two should agree closely).
+  const fs::path full = fs::temp_directory_path() / "glam_resume_test_full";
+  fs::remove_all(full);
+  RunMapping(kClip / "video.mp4", full, DemoOptions());
+  const eval::EvaluationResult resumed = eval::EvaluateDirectories(kClip, out, {});
+  const eval::EvaluationResult uninterrupted = eval::EvaluateDirectories(kClip, full, {});
+  EXPECT_GE(resumed.trajectory.fraction_posed, uninterrupted.trajectory.fraction_posed - 0.01);
+  EXPECT_LT(resumed.trajectory.ate_rmse, 1.1 * uninterrupted.trajectory.ate_rmse + 0.02)
+      << "resumed: " << eval::Summary(resumed) << "\nuninterrupted: " << eval::Summary(uninterrupted);
+  // And accurate in absolute terms: under 1 % of the 100 m flying height.
+  EXPECT_LT(resumed.trajectory.ate_rmse, 1.0) << eval::Summary(resumed);
+  fs::remove_all(out);
+  fs::remove_all(full);
+}
+
+TEST(ResumeMapping, WithoutACheckpointResumeStartsFromTheBeginning) {
+  const fs::path out = fs::temp_directory_path() / "glam_resume_test_fresh";
+  fs::remove_all(out);
+  fs::create_directories(out / "submaps" / "999999");  // a stale leftover is cleared
+  MappingOptions options = DemoOptions();
+  options.resume = true;
+  options.source.stride = 3;  // quick: 100 frames
+  const MappingReport report = RunMapping(kClip / "video.mp4", out, options);
+  EXPECT_EQ(report.resumed_from_frame, -1);
+  EXPECT_GE(report.submaps, 1);
+  EXPECT_FALSE(fs::exists(out / "submaps" / "999999"));
+  fs::remove_all(out);
+}
+
+}  // namespace
+}  // namespace glam

@@ -1,0 +1,512 @@
+// The REST API over real HTTP on a loopback port, with the real upload probe but a fake
+// engine (fast, deterministic): status codes and JSON errors, auth, path traversal, SSE replay,
+// downloads with ETag / Range, concurrent uploads, and that openapi.yaml documents every route.
+#include <sys/resource.h>
+
+#include <atomic>
+#include <csignal>
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <set>
+#include <thread>
+
+#include <gtest/gtest.h>
+
+#include "api/job_service.h"
+#include "engine/core/error.h"
+#include "server/http_server.h"
+#include "tests/server/server_test_util.h"
+
+namespace glam::server {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+using glam::testing::ReadSse;
+using glam::testing::SseEvent;
+using nlohmann::json;
+
+constexpr const char* kTrajectory = "0.0 1 2 3 0 0 0 1\n0.1 1.5 2 3 0 0 0 1\n";
+
+struct FakeEngine {
+  std::atomic<bool> hold{false};
+  std::atomic<bool> at_hold{false};
+
+  MappingReport Run(const fs::path& dir, const ProgressCallback& progress, const CancellationToken& cancel) {
+    for (int i = 1; i <= 6; ++i) {
+      cancel.ThrowIfCancelled();
+      MappingProgress p;
+      p.stage = "mapping";
+      p.frames_done = i * 5;
+      p.frames_total = 30;
+      p.submaps_completed = i / 2;
+      p.revision = i / 2;
+      progress(p);
+      while (hold && i == 3) {
+        at_hold = true;
+        cancel.ThrowIfCancelled();
+        std::this_thread::sleep_for(2ms);
+      }
+      std::this_thread::sleep_for(5ms);
+    }
+    std::ofstream(dir / "trajectory.tum") << kTrajectory;
+    return MappingReport{};
+  }
+};
+
+class HttpApiTest : public ::testing::Test {
+ protected:
+  void Start(HttpServerOptions options = {}, const std::string& name = "api") {
+    dir_ = glam::testing::FreshTempDir(name);
+    video_ = glam::testing::MakeTinyVideo(dir_);
+    api::JobServiceOptions service_options;
+    service_options.data_dir = dir_ / "data";
+    service_options.progress_interval = 0ms;
+    service_options.executor = [this](const api::Job&, const fs::path& d, const MappingOptions&,
+                                      const ProgressCallback& p, const CancellationToken& c) {
+      return engine_.Run(d, p, c);
+    };
+    service_ = std::make_unique<api::JobService>(service_options);
+    options.port = 0;
+    if (options.max_upload_bytes == HttpServerOptions{}.max_upload_bytes) options.max_upload_bytes = 1 << 20;
+    http_ = std::make_unique<HttpServer>(*service_, options);
+    port_ = http_->Bind();
+    thread_ = std::thread([this] { http_->Run(); });
+  }
+
+  void TearDown() override {
+    if (!http_) return;
+    service_->Shutdown();
+    http_->Stop();
+    thread_.join();
+  }
+
+  httplib::Client Client() {
+    httplib::Client client("127.0.0.1", port_);
+    client.set_read_timeout(30s);
+    if (!token_.empty()) client.set_bearer_token_auth(token_);
+    return client;
+  }
+
+  httplib::Result UploadMultipart(httplib::Client& client, const std::string& options_json = "") {
+    httplib::MultipartFormDataItems items = {
+        {"video", glam::testing::ReadFile(video_), "clip.avi", "video/x-msvideo"}};
+    if (!options_json.empty()) items.push_back({"options", options_json, "", "application/json"});
+    return client.Post("/api/v1/jobs", items);
+  }
+
+  std::string CreateJob(httplib::Client& client, const std::string& options_json = "") {
+    auto res = UploadMultipart(client, options_json);
+    EXPECT_TRUE(res);
+    if (!res) return "";
+    EXPECT_EQ(res->status, 201) << res->body;
+    return json::parse(res->body)["id"];
+  }
+
+  std::vector<SseEvent> FollowToEnd(httplib::Client& client, const std::string& id,
+                                    httplib::Headers headers = {}) {
+    const auto result = ReadSse(client, "/api/v1/jobs/" + id + "/events", headers,
+                                [](const SseEvent&) { return false; }, 30s);
+    EXPECT_EQ(result.status, 200);
+    EXPECT_TRUE(result.ended_by_server);
+    return result.events;
+  }
+
+  void WaitForHold() {
+    const auto deadline = std::chrono::steady_clock::now() + 10s;
+    while (!engine_.at_hold && std::chrono::steady_clock::now() < deadline) std::this_thread::sleep_for(2ms);
+    ASSERT_TRUE(engine_.at_hold);
+  }
+
+  fs::path dir_;
+  fs::path video_;
+  FakeEngine engine_;
+  std::string token_;
+  std::unique_ptr<api::JobService> service_;
+  std::unique_ptr<HttpServer> http_;
+  std::thread thread_;
+  int port_ = 0;
+};
+
+// Asserts the documented status and a JSON error body with that code.
+void ExpectError(const httplib::Result& res, int status, const std::string& code, const std::string& what) {
+  ASSERT_TRUE(res) << what << ": " << httplib::to_string(res.error());
+  EXPECT_EQ(res->status, status) << what << ": " << res->body;
+  EXPECT_EQ(res->get_header_value("Content-Type"), "application/json") << what;
+  const json body = json::parse(res->body, nullptr, false);
+  ASSERT_TRUE(body.is_object() && body.contains("error")) << what << ": " << res->body;
+  if (!code.empty()) {
+    EXPECT_EQ(body["error"]["code"], code) << what;
+  }
+  EXPECT_FALSE(body["error"]["message"].get<std::string>().empty()) << what;
+}
+
+TEST_F(HttpApiTest, UploadFollowEventsAndDownload) {
+  Start();
+  auto client = Client();
+  auto res = UploadMultipart(client, R"({"name": "survey", "stride": 1})");
+  ASSERT_TRUE(res);
+  ASSERT_EQ(res->status, 201) << res->body;
+  const json job = json::parse(res->body);
+  const std::string id = job["id"];
+  EXPECT_EQ(res->get_header_value("Location"), "/api/v1/jobs/" + id);
+  EXPECT_EQ(job["name"], "survey");
+  EXPECT_EQ(job["input"]["width"], 64);
+  EXPECT_EQ(job["urls"]["events"], "/api/v1/jobs/" + id + "/events");
+
+  const auto events = FollowToEnd(client, id);
+  ASSERT_FALSE(events.empty());
+  std::vector<std::string> states;
+  int submaps = 0;
+  for (std::size_t i = 0; i < events.size(); ++i) {
+    if (i > 0) {
+      EXPECT_GT(events[i].id, events[i - 1].id);
+    }
+    if (events[i].type == "state") states.push_back(events[i].data["state"]);
+    if (events[i].type == "submap") ++submaps;
+  }
+  EXPECT_EQ(states.back(), "completed");
+  EXPECT_EQ(events.back().type, "state");  // the stream ends after the final state event
+  EXPECT_EQ(submaps, 3);
+
+  res = client.Get("/api/v1/jobs/" + id);
+  ASSERT_TRUE(res);
+  EXPECT_EQ(json::parse(res->body)["state"], "completed");
+  EXPECT_EQ(json::parse(res->body)["progress"]["frames_done"], 30);
+
+  res = client.Get("/api/v1/jobs/" + id + "/trajectory.tum");
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 200);
+  EXPECT_EQ(res->body, kTrajectory);
+  EXPECT_EQ(res->get_header_value("Content-Type"), "text/plain; charset=utf-8");
+  const std::string etag = res->get_header_value("ETag");
+  ASSERT_FALSE(etag.empty());
+  res = client.Get("/api/v1/jobs/" + id + "/trajectory.tum", {{"If-None-Match", etag}});
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 304);
+  EXPECT_TRUE(res->body.empty());
+  res = client.Get("/api/v1/jobs/" + id + "/trajectory.tum", {{"Range", "bytes=4-9"}});
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 206);
+  EXPECT_EQ(res->body, std::string(kTrajectory).substr(4, 6));
+  EXPECT_EQ(res->get_header_value("Content-Range"), "bytes 4-9/" + std::to_string(std::string(kTrajectory).size()));
+  ExpectError(client.Get("/api/v1/jobs/" + id + "/trajectory.tum", {{"Range", "bytes=9999-"}}), 416, "", "range");
+  ExpectError(client.Get("/api/v1/jobs/" + id + "/points.ply"), 404, "not_found", "missing result");
+  ExpectError(client.Get("/api/v1/jobs/" + id + "/tileset.json"), 404, "not_available", "tiles");
+  ExpectError(client.Get("/api/v1/jobs/" + id + "/tiles/0.glb"), 404, "not_available", "tile");
+
+  res = client.Get("/api/v1/jobs?limit=10");
+  ASSERT_TRUE(res);
+  const json page = json::parse(res->body);
+  EXPECT_EQ(page["total"], 1);
+  EXPECT_EQ(page["jobs"][0]["id"], id);
+}
+
+TEST_F(HttpApiTest, RawBodyUploadTakesOptionsFromQuery) {
+  Start({}, "raw");
+  auto client = Client();
+  auto res = client.Post("/api/v1/jobs?name=raw%20clip&stride=2&filename=c.avi",
+                         glam::testing::ReadFile(video_), "video/x-msvideo");
+  ASSERT_TRUE(res);
+  ASSERT_EQ(res->status, 201) << res->body;
+  const json job = json::parse(res->body);
+  EXPECT_EQ(job["name"], "raw clip");
+  EXPECT_EQ(job["options"]["stride"], 2);
+  EXPECT_TRUE(fs::exists(dir_ / "data" / "jobs" / job["id"].get<std::string>() / "input.avi"));
+  res = client.Post("/api/v1/jobs", {{"X-Glam-Options", R"({"keyframes_per_submap": 6})"}},
+                    glam::testing::ReadFile(video_), "application/octet-stream");
+  ASSERT_TRUE(res);
+  ASSERT_EQ(res->status, 201) << res->body;
+  EXPECT_EQ(json::parse(res->body)["options"]["keyframes_per_submap"], 6);
+}
+
+TEST_F(HttpApiTest, BadRequestCorpusGetsDocumentedStatuses) {
+  Start({}, "corpus");
+  auto client = Client();
+  const std::string video = glam::testing::ReadFile(video_);
+  ExpectError(client.Post("/api/v1/jobs", "hello", "text/plain"), 415, "unsupported_media_type", "text/plain");
+  ExpectError(client.Post("/api/v1/jobs", "", "video/mp4"), 400, "empty_body", "empty body");
+  ExpectError(client.Post("/api/v1/jobs", std::string(4096, 'x'), "video/mp4"), 422, "unsupported_video", "garbage");
+  ExpectError(client.Post("/api/v1/jobs", video.substr(0, 200), "video/x-msvideo"), 422, "unsupported_video",
+              "truncated");
+  ExpectError(client.Post("/api/v1/jobs", std::string(2 << 20, 'x'), "video/mp4"), 413, "payload_too_large",
+              "oversized raw");
+  ExpectError(client.Post("/api/v1/jobs",
+                          httplib::MultipartFormDataItems{{"video", std::string(2 << 20, 'x'), "big.mp4", "video/mp4"}}),
+              413, "payload_too_large", "oversized multipart");
+  ExpectError(UploadMultipart(client, "{not json"), 400, "bad_request", "malformed options");
+  ExpectError(UploadMultipart(client, R"({"stride": -3})"), 400, "bad_request", "bad stride");
+  ExpectError(client.Post("/api/v1/jobs?stride=abc", video, "video/x-msvideo"), 400, "bad_request", "bad query");
+  ExpectError(client.Post("/api/v1/jobs", httplib::MultipartFormDataItems{{"other", "x", "", "text/plain"}}), 400,
+              "missing_video", "no video field");
+  ExpectError(client.Get("/api/v1/jobs/ffffffffffffffff"), 404, "not_found", "unknown id");
+  ExpectError(client.Get("/api/v1/jobs/FFFFFFFFFFFFFFFF"), 400, "invalid_id", "upper-case id");
+  ExpectError(client.Get("/api/v1/jobs/a.b"), 400, "invalid_id", "id with a dot");
+  ExpectError(client.Post("/api/v1/jobs/ffffffffffffffff/cancel"), 404, "not_found", "cancel unknown");
+  ExpectError(client.Delete("/api/v1/jobs/ffffffffffffffff"), 404, "not_found", "delete unknown");
+  ExpectError(client.Get("/api/v1/jobs?limit=abc"), 400, "bad_request", "limit abc");
+  ExpectError(client.Get("/api/v1/jobs?limit=0"), 400, "bad_request", "limit 0");
+  ExpectError(client.Get("/api/v1/nothing"), 404, "not_found", "unknown route");
+
+  // Actions not allowed in the current state.
+  engine_.hold = true;
+  const std::string id = CreateJob(client);
+  WaitForHold();
+  ExpectError(client.Post("/api/v1/jobs/" + id + "/restart"), 409, "invalid_state", "restart running");
+  ExpectError(client.Get("/api/v1/jobs/" + id + "/trajectory.tum"), 409, "not_ready", "download running");
+  ExpectError(client.Get("/api/v1/jobs/" + id + "/events", {{"Last-Event-ID", "abc"}}), 400, "bad_request",
+              "bad Last-Event-ID");
+  ExpectError(client.Get("/api/v1/jobs/" + id + "/tiles/abc.glb"), 400, "bad_request", "tile name");
+  auto res = client.Post("/api/v1/jobs/" + id + "/cancel");
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 200);
+  EXPECT_EQ(json::parse(res->body)["state"], "canceled");
+  ExpectError(client.Post("/api/v1/jobs/" + id + "/cancel"), 409, "invalid_state", "cancel canceled");
+
+  res = client.Get("/api/v1/health");
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 200);
+  EXPECT_TRUE(json::parse(res->body)["ok"].get<bool>());
+}
+
+TEST_F(HttpApiTest, PathTraversalNeverReachesTheFileSystem) {
+  Start({}, "traversal");
+  std::ofstream(dir_ / "secret.txt") << "TOPSECRET-42";
+  auto client = Client();
+  const std::string id = CreateJob(client);
+  FollowToEnd(client, id);
+  for (const std::string& path : std::vector<std::string>{
+           "/api/v1/jobs/..%2f..%2fetc/trajectory.tum", "/api/v1/jobs/..%2F..%2F..%2Fsecret.txt",
+        "/api/v1/jobs/../../secret.txt", "/api/v1/jobs/" + id + "/..%2f..%2f..%2fsecret.txt",
+        "/api/v1/jobs/" + id + "/tiles/..%2f..%2fglam.db", "/api/v1/jobs/" + id + "/tiles/..%2f1.glb",
+        "/api/v1/jobs/%2e%2e/trajectory.tum", "/api/v1/jobs/" + id + "%2f..%2f..%2fglam.db"}) {
+    auto res = client.Get(path);
+    ASSERT_TRUE(res) << path;
+    EXPECT_TRUE(res->status == 400 || res->status == 404) << path << " -> " << res->status;
+    EXPECT_EQ(res->body.find("TOPSECRET"), std::string::npos) << path;
+    EXPECT_EQ(res->body.find("SQLite"), std::string::npos) << path;
+  }
+}
+
+TEST_F(HttpApiTest, TokenIsRequiredExceptForHealthAndSpec) {
+  HttpServerOptions options;
+  options.token = "s3cret-token";
+  Start(options, "token");
+  auto anonymous = Client();
+  ExpectError(anonymous.Get("/api/v1/jobs"), 401, "unauthorized", "no token");
+  ExpectError(UploadMultipart(anonymous), 401, "unauthorized", "upload without token");
+  ExpectError(anonymous.Get("/api/v1/metrics"), 401, "unauthorized", "metrics");
+  auto wrong = Client();
+  wrong.set_bearer_token_auth("s3cret-tokem");
+  ExpectError(wrong.Get("/api/v1/jobs"), 401, "unauthorized", "wrong token");
+  EXPECT_EQ(anonymous.Get("/api/v1/health")->status, 200);
+  EXPECT_EQ(anonymous.Get("/api/v1/openapi.yaml")->status, 200);
+  EXPECT_EQ(anonymous.Get("/api/v1/jobs?token=s3cret-token")->status, 200);  // EventSource style
+  token_ = "s3cret-token";
+  auto client = Client();
+  EXPECT_EQ(client.Get("/api/v1/jobs")->status, 200);
+  const std::string id = CreateJob(client);
+  EXPECT_FALSE(id.empty());
+  ExpectError(anonymous.Get("/api/v1/jobs/" + id + "/events"), 401, "unauthorized", "events");
+}
+
+TEST_F(HttpApiTest, LastEventIdReplaysExactlyTheMissedEvents) {
+  Start({}, "replay");
+  auto client = Client();
+  const std::string id = CreateJob(client);
+  const auto all = FollowToEnd(client, id);
+  ASSERT_GE(all.size(), 4u);
+  const std::int64_t resume_after = all[1].id;
+  std::vector<std::int64_t> expected;
+  for (const SseEvent& e : all) {
+    if (e.id > resume_after && e.type != "progress") expected.push_back(e.id);
+  }
+  const auto replay = FollowToEnd(client, id, {{"Last-Event-ID", std::to_string(resume_after)}});
+  std::vector<std::int64_t> got;
+  for (const SseEvent& e : replay) got.push_back(e.id);
+  EXPECT_EQ(got, expected);
+  // Query-parameter form for clients that cannot set headers.
+  const auto result = ReadSse(client, "/api/v1/jobs/" + id + "/events?lastEventId=" + std::to_string(resume_after),
+                              {}, [](const SseEvent&) { return false; });
+  EXPECT_EQ(result.events.size(), expected.size());
+}
+
+TEST_F(HttpApiTest, TwoUploadsAtOnceBothComplete) {
+  Start({}, "parallel");
+  std::string ids[2];
+  std::thread uploads[2];
+  for (int i = 0; i < 2; ++i) {
+    uploads[i] = std::thread([&, i] {
+      auto client = Client();
+      ids[i] = CreateJob(client);
+    });
+  }
+  for (auto& t : uploads) t.join();
+  ASSERT_FALSE(ids[0].empty());
+  ASSERT_FALSE(ids[1].empty());
+  EXPECT_NE(ids[0], ids[1]);
+  auto client = Client();
+  for (const std::string& id : ids) {
+    FollowToEnd(client, id);
+    EXPECT_EQ(json::parse(client.Get("/api/v1/jobs/" + id)->body)["state"], "completed");
+  }
+}
+
+TEST_F(HttpApiTest, CancelRestartDeleteOverHttp) {
+  Start({}, "lifecycle");
+  auto client = Client();
+  engine_.hold = true;
+  const std::string id = CreateJob(client);
+  WaitForHold();
+  auto res = client.Post("/api/v1/jobs/" + id + "/cancel");
+  ASSERT_TRUE(res);
+  EXPECT_EQ(json::parse(res->body)["state"], "canceled");
+  engine_.hold = false;
+  res = client.Post("/api/v1/jobs/" + id + "/restart");
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 200);
+  EXPECT_EQ(json::parse(res->body)["state"], "queued");
+  FollowToEnd(client, id, {{"Last-Event-ID", json::parse(res->body)["id"].is_string() ? "0" : "0"}});
+  EXPECT_EQ(json::parse(client.Get("/api/v1/jobs/" + id)->body)["state"], "completed");
+  res = client.Delete("/api/v1/jobs/" + id);
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 204);
+  EXPECT_EQ(client.Get("/api/v1/jobs/" + id)->status, 404);
+  EXPECT_FALSE(fs::exists(dir_ / "data" / "jobs" / id));
+}
+
+TEST_F(HttpApiTest, EventStreamsAreBounded) {
+  HttpServerOptions options;
+  options.max_sse_clients = 1;
+  options.http_threads = 8;
+  Start(options, "sse_limit");
+  engine_.hold = true;
+  auto client = Client();
+  const std::string id = CreateJob(client);
+  WaitForHold();
+  std::atomic<bool> first_open{false};
+  std::thread first([&] {
+    auto c = Client();
+    ReadSse(c, "/api/v1/jobs/" + id + "/events", {}, [&](const SseEvent&) {
+      first_open = true;
+      return false;
+    }, 20s);
+  });
+  const auto deadline = std::chrono::steady_clock::now() + 10s;
+  while (!first_open && std::chrono::steady_clock::now() < deadline) std::this_thread::sleep_for(5ms);
+  ASSERT_TRUE(first_open);
+  ExpectError(client.Get("/api/v1/jobs/" + id + "/events"), 503, "too_many_streams", "second stream");
+  engine_.hold = false;  // the job completes, the first stream ends
+  first.join();
+}
+
+TEST_F(HttpApiTest, CorsHeadersOnlyWhenConfigured) {
+  HttpServerOptions options;
+  options.cors_origin = "https://viewer.example";
+  Start(options, "cors");
+  auto client = Client();
+  auto res = client.Get("/api/v1/jobs");
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->get_header_value("Access-Control-Allow-Origin"), "https://viewer.example");
+  res = client.Options("/api/v1/jobs", {{"Origin", "https://viewer.example"},
+                                        {"Access-Control-Request-Method", "POST"}});
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 204);
+  EXPECT_NE(res->get_header_value("Access-Control-Allow-Headers").find("Authorization"), std::string::npos);
+}
+
+TEST_F(HttpApiTest, NoCorsHeadersByDefault) {
+  Start({}, "nocors");
+  auto client = Client();
+  auto res = client.Get("/api/v1/jobs");
+  ASSERT_TRUE(res);
+  EXPECT_FALSE(res->has_header("Access-Control-Allow-Origin"));
+}
+
+// A full disk is simulated with the process file-size limit: writes past it fail (EFBIG),
+// exactly like ENOSPC for the upload code.
+TEST_F(HttpApiTest, FullDiskDuringUploadIs507AndLeavesNoPartialFile) {
+  Start({}, "disk_full");
+  auto client = Client();
+  ASSERT_EQ(client.Get("/api/v1/health")->status, 200);  // store opened and written before the limit
+  std::signal(SIGXFSZ, SIG_IGN);
+  rlimit old_limit{};
+  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &old_limit), 0);
+  rlimit small = old_limit;
+  small.rlim_cur = 256 * 1024;
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &small), 0);
+  auto res = client.Post("/api/v1/jobs", std::string(600 * 1024, 'x'), "video/mp4");
+  setrlimit(RLIMIT_FSIZE, &old_limit);
+  ExpectError(res, 507, "insufficient_storage", "disk full");
+  EXPECT_TRUE(fs::is_empty(dir_ / "data" / "uploads"));
+  auto again = Client();
+  EXPECT_EQ(again.Get("/api/v1/health")->status, 200);
+}
+
+TEST_F(HttpApiTest, OpenApiDocumentsEveryRoute) {
+  Start({}, "openapi");
+  auto client = Client();
+  auto res = client.Get("/api/v1/openapi.yaml");
+  ASSERT_TRUE(res);
+  ASSERT_EQ(res->status, 200);
+  // Minimal YAML reading: path keys are indented 2 spaces under `paths:`, operations 4.
+  std::set<std::pair<std::string, std::string>> documented;
+  std::istringstream in(res->body);
+  std::string line;
+  std::string current_path;
+  bool in_paths = false;
+  const std::regex path_key(R"(^  (/[^:]+):\s*$)");
+  const std::regex method_key(R"(^    (get|post|put|delete|patch):\s*$)");
+  std::smatch m;
+  while (std::getline(in, line)) {
+    if (line.rfind("paths:", 0) == 0) {
+      in_paths = true;
+    } else if (!line.empty() && line[0] != ' ' && line[0] != '#') {
+      in_paths = false;
+    } else if (in_paths && std::regex_match(line, m, path_key)) {
+      current_path = m[1];
+    } else if (in_paths && std::regex_match(line, m, method_key)) {
+      std::string method = m[1];
+      for (char& c : method) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+      documented.insert({method, "/api/v1" + current_path});
+    }
+  }
+  std::set<std::pair<std::string, std::string>> registered;
+  for (const RouteInfo& route : HttpServer::Routes()) registered.insert({route.method, route.path});
+  for (const auto& route : registered) {
+    EXPECT_EQ(documented.count(route), 1u) << route.first << " " << route.second << " is not in openapi.yaml";
+  }
+  for (const auto& doc : documented) {
+    EXPECT_EQ(registered.count(doc), 1u) << doc.first << " " << doc.second << " is documented but not served";
+  }
+  EXPECT_GE(registered.size(), 17u);
+}
+
+TEST_F(HttpApiTest, HealthAndMetricsReportJobsAndRequests) {
+  Start({}, "metrics");
+  auto client = Client();
+  const std::string id = CreateJob(client);
+  FollowToEnd(client, id);
+  client.Get("/api/v1/jobs/" + id);
+  auto res = client.Get("/api/v1/health");
+  ASSERT_TRUE(res);
+  const json health = json::parse(res->body);
+  EXPECT_TRUE(health["ok"].get<bool>());
+  EXPECT_EQ(health["jobs"]["completed"], 1);
+  EXPECT_GT(health["disk_free_bytes"].get<double>(), 0);
+  res = client.Get("/api/v1/metrics");
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 200);
+  const std::string& text = res->body;
+  EXPECT_NE(text.find("glam_jobs{state=\"completed\"} 1\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("glam_frames_processed_total 30\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("glam_http_requests_total{route=\"/api/v1/jobs/{id}\",method=\"GET\",code=\"200\"} 1\n"),
+            std::string::npos)
+      << text;
+  EXPECT_NE(text.find("glam_http_request_duration_seconds_count{route=\"/api/v1/jobs\"}"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace glam::server
