@@ -13,6 +13,7 @@ PACKAGES=(
   libspdlog-dev libfmt-dev libsqlite3-dev libtbb-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   ffmpeg libavcodec-dev libavformat-dev libswscale-dev
+  curl jq
 )
 
 if [[ "${1:-}" == "--print" ]]; then
