@@ -30,6 +30,7 @@ struct MapArgs {
   std::string intrinsics_path;
   double focal = 0;
   bool refine_focal = false;
+  std::string vocabulary_path;
   MappingOptions options;
 };
 
@@ -74,6 +75,7 @@ void RunMap(MapArgs& args) {
     args.options.submap.bundle_adjustment.refine_focal = args.refine_focal;
   }
   if (args.focal != 0) args.options.focal_px = args.focal;
+  if (!args.vocabulary_path.empty()) args.options.vocabulary = args.vocabulary_path;
   args.options.Check();
   if (!std::filesystem::exists(args.input)) {
     throw InputError(fmt::format("input {} does not exist", args.input));
@@ -112,7 +114,8 @@ void RunMap(MapArgs& args) {
 void RegisterMapCommand(CLI::App& app) {
   auto args = std::make_shared<MapArgs>();
   CLI::App* cmd = app.add_subcommand(
-      "map", "Build submaps, trajectory.tum, points.ply and report.json from a video or image folder");
+      "map", "Build submaps, align them (loop closure) and write trajectory.tum, points.ply, "
+             "report.json and graph.json from a video or image folder");
   cmd->add_option("input", args->input, "Video file (MP4/MOV/MKV) or folder of images")->required();
   cmd->add_option("--out", args->out, "Output directory")->required();
   cmd->add_option("--intrinsics", args->intrinsics_path,
@@ -133,6 +136,11 @@ void RegisterMapCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--max-features", args->options.sift.max_features, "SIFT features per frame")
       ->capture_default_str();
+  cmd->add_flag("--resume", args->options.resume,
+               "Continue an interrupted run in the same --out from its last completed submap "
+               "(checkpoint.json); without a usable checkpoint the run starts from the beginning");
+  cmd->add_option("--vocabulary", args->vocabulary_path,
+                  "Vocabulary tree for finding overlapping submaps (glam vocab train); default: built in");
   cmd->callback([args] { RunMap(*args); });
 }
 
