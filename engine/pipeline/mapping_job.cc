@@ -11,6 +11,7 @@
 
 #include <fmt/format.h>
 
+#include "engine/core/atomic_file.h"
 #include "engine/core/bounded_queue.h"
 #include "engine/core/error.h"
 #include "engine/core/logging.h"
@@ -48,18 +49,8 @@ void PrepareOutputDirectory(const std::filesystem::path& out_dir) {
   std::filesystem::remove(probe, ec);
 }
 
-// Temporary file + rename: a reader (the server) never sees half a report.
 void WriteJson(const std::filesystem::path& path, const nlohmann::json& json) {
-  const std::filesystem::path tmp = path.string() + ".tmp";
-  {
-    std::ofstream out(tmp);
-    out << json.dump(2) << "\n";
-    out.close();
-    if (!out) throw EnvironmentError(fmt::format("cannot write {}", tmp.string()));
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) throw EnvironmentError(fmt::format("cannot write {}: {}", path.string(), ec.message()));
+  WriteFileAtomically(path, json.dump(2) + "\n");
 }
 
 // A fresh run owns out_dir's submaps/ and checkpoint: leftovers of an earlier run there would

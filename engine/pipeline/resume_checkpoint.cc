@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "engine/core/atomic_file.h"
 #include "engine/core/error.h"
 
 namespace glam {
@@ -16,17 +17,7 @@ void WriteCheckpoint(const std::filesystem::path& out_dir, const ResumeCheckpoin
                                {"focal_px", c.focal},
                                {"input", c.input},
                                {"processing_size", {c.processing_width, c.processing_height}}};
-  const std::filesystem::path path = out_dir / kCheckpointFile;
-  const std::filesystem::path tmp = out_dir / (std::string(kCheckpointFile) + ".tmp");
-  {
-    std::ofstream out(tmp);
-    out << json.dump(2) << "\n";
-    out.close();
-    if (!out) throw EnvironmentError(fmt::format("cannot write {}", tmp.string()));
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) throw EnvironmentError(fmt::format("cannot write {}: {}", path.string(), ec.message()));
+  WriteFileAtomically(out_dir / kCheckpointFile, json.dump(2) + "\n");
 }
 
 std::optional<ResumeCheckpoint> ReadCheckpoint(const std::filesystem::path& out_dir) {

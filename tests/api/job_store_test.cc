@@ -9,6 +9,8 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/support/temp_dir.h"
+
 #include "api/ids.h"
 #include "engine/core/error.h"
 
@@ -17,26 +19,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Unique per process (several build trees may run the tests at the same time on one
-// machine); removed when the process exits.
-fs::path FreshDir(const std::string& name) {
-  struct Cleanup {
-    std::vector<fs::path> dirs;
-    ~Cleanup() {
-      for (const fs::path& d : dirs) {
-        std::error_code ec;
-        fs::remove_all(d, ec);
-      }
-    }
-  };
-  static Cleanup cleanup;
-  const fs::path dir =
-      fs::temp_directory_path() / ("glam_api_store_" + name + "_" + std::to_string(getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  cleanup.dirs.push_back(dir);
-  return dir;
-}
+fs::path FreshDir(const std::string& name) { return glam::testing::FreshTempDir("api_store_" + name); }
 
 Job MakeJob(std::int64_t created_ms) {
   Job job;

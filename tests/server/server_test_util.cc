@@ -13,26 +13,6 @@ namespace glam::testing {
 
 namespace fs = std::filesystem;
 
-// Unique per process (several build trees may run the tests at the same time on one
-// machine); removed when the process exits.
-fs::path FreshTempDir(const std::string& name) {
-  struct Cleanup {
-    std::vector<fs::path> dirs;
-    ~Cleanup() {
-      for (const fs::path& d : dirs) {
-        std::error_code ec;
-        fs::remove_all(d, ec);
-      }
-    }
-  };
-  static Cleanup cleanup;
-  const fs::path dir =
-      fs::temp_directory_path() / ("glam_server_test_" + name + "_" + std::to_string(getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  cleanup.dirs.push_back(dir);
-  return dir;
-}
 
 fs::path MakeTinyVideo(const fs::path& dir, int frames) {
   const fs::path path = dir / "tiny.avi";

@@ -13,9 +13,10 @@
 
 #include <httplib.h>
 
+#include "tests/support/temp_dir.h"  // FreshTempDir
+
 namespace glam::testing {
 
-std::filesystem::path FreshTempDir(const std::string& name);
 
 // A 64x48 MJPG AVI with `frames` noise frames, written with OpenCV.
 std::filesystem::path MakeTinyVideo(const std::filesystem::path& dir, int frames = 8);
