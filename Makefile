@@ -10,6 +10,7 @@ JOBS ?= $(shell nproc)
 
 deps:
 	bash scripts/setup-deps.sh
+	bash scripts/setup-node.sh
 
 configure: deps
 	cmake -S . -B $(BUILD_DIR) -G Ninja $(PRESET_FLAGS)

@@ -303,22 +303,29 @@ fs::path JobService::ResultFile(const std::string& id, const std::string& name) 
     return path;
   }
   fs::path path;
-  if (name == "tileset.json" || name == "map.glb") {
+  if (name == "tileset.json" || name == "tileset.quantized.json" || name == "map.glb") {
     path = dir / name;
   } else if (name.rfind("tiles/", 0) == 0 && name.size() > 10 &&
              name.compare(name.size() - 4, 4, ".glb") == 0) {
+    // tiles/<n>.glb (Draco) or tiles/<n>.quantized.glb (KHR_mesh_quantization variant).
+    std::string_view stem = std::string_view(name).substr(6, name.size() - 10);
+    constexpr std::string_view kQuantized = ".quantized";
+    const bool quantized = stem.size() > kQuantized.size() &&
+                           stem.substr(stem.size() - kQuantized.size()) == kQuantized;
+    if (quantized) stem.remove_suffix(kQuantized.size());
     long long submap = 0;
-    if (!ParseNonNegativeInt(std::string_view(name).substr(6, name.size() - 10), &submap)) {
+    if (!ParseNonNegativeInt(stem, &submap)) {
       throw ApiError(400, "bad_request", "tile names are tiles/<submap number>.glb");
     }
-    path = dir / "tiles" / fmt::format("{}.glb", submap);
+    path = dir / "tiles" / fmt::format("{}{}.glb", submap, quantized ? ".quantized" : "");
   } else {
     throw ApiError(404, "not_found", fmt::format("unknown result file {}", name));
   }
   if (!fs::is_regular_file(path)) {
     throw ApiError(404, "not_available",
-                   fmt::format("{} is not available for job {}: map tiles are not produced by "
-                               "this server version yet",
+                   fmt::format("{} is not available for job {}: map tiles appear as submaps "
+                               "complete, the tileset with the first map revision, map.glb "
+                               "when the job completes",
                                name, id));
   }
   return path;

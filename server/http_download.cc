@@ -2,6 +2,8 @@
 // with a strong ETag (size + modification time) for If-None-Match / 304, and byte ranges
 // (cpp-httplib turns req.ranges into 206 + Content-Range once a length-aware provider is set;
 // unsatisfiable ranges are answered with 416 here, which cpp-httplib 0.11 does not do).
+// Map tiles: ?format=quantized picks the KHR_mesh_quantization variant of a tile or tileset;
+// tiles are immutable once written (long-lived cache), everything else is no-cache + ETag.
 #include <sys/stat.h>
 
 #include <cstdio>
@@ -52,7 +54,19 @@ void HandleDownload(Context& ctx, const httplib::Request& req, httplib::Response
                     const std::string& file_name) {
   const std::string id = JobIdParam(req);
   std::string name = file_name;
-  if (name == "tiles/{submap}.glb") name = "tiles/" + std::string(req.matches[2]) + ".glb";
+  const bool tile = name == "tiles/{submap}.glb";
+  if (tile) name = "tiles/" + std::string(req.matches[2]) + ".glb";
+  // ?format=quantized: the KHR_mesh_quantization variant of a tile, or the tileset that
+  // points at those variants (for standard 3D Tiles clients, which cannot read Draco points).
+  const std::string format = req.get_param_value("format");
+  if (!format.empty() && (tile || name == "tileset.json")) {
+    if (format == "quantized") {
+      name = tile ? name.substr(0, name.size() - 4) + ".quantized.glb" : "tileset.quantized.json";
+    } else if (format != "draco") {
+      throw api::ApiError(400, "bad_request",
+                          fmt::format("format must be draco or quantized, not '{}'", format));
+    }
+  }
   const std::filesystem::path path = ctx.service.ResultFile(id, name);
 
   struct stat info {};
@@ -66,7 +80,9 @@ void HandleDownload(Context& ctx, const httplib::Request& req, httplib::Response
   const std::string etag = fmt::format("\"{:x}-{:x}{:09}\"", size, info.st_mtim.tv_sec, info.st_mtim.tv_nsec);
   res.set_header("ETag", etag);
   res.set_header("Accept-Ranges", "bytes");
-  res.set_header("Cache-Control", "no-cache");
+  // A tile is written once, when its submap completes, and never changes: cache it for good.
+  // Everything else (tileset.json gets a new revision on every alignment) is revalidated.
+  res.set_header("Cache-Control", tile ? "public, max-age=31536000, immutable" : "no-cache");
   if (req.has_header("If-None-Match") && EtagMatches(req.get_header_value("If-None-Match"), etag)) {
     res.status = 304;
     return;

@@ -21,6 +21,7 @@
 #include "engine/pipeline/alignment_thread.h"
 #include "engine/pipeline/map_export.h"
 #include "engine/pipeline/resume_checkpoint.h"
+#include "engine/pipeline/tile_writer.h"
 #include "engine/submap/submap_builder.h"
 #include "engine/video/frame_source.h"
 
@@ -146,6 +147,8 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   } else {
     ClearPreviousRun(out_dir);
   }
+  // Map tiles for the viewer (written once per submap) and tileset.json (per revision).
+  TileWriter tiles(out_dir);
   GLAM_LOG_INFO("mapping {}: {}x{} -> {}x{}, {:.3g} fps, ~{} frames, initial focal {:.1f} px",
                 report.input, info.original_size.width, info.original_size.height,
                 info.processing_size.width, info.processing_size.height, report.fps,
@@ -198,6 +201,7 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
       Submap& submap = completed[i];
       const auto write_start = Clock::now();
       WriteSubmap(submap, submaps_root);
+      tiles.OnSubmapCompleted(submap);
       WriteCheckpoint(out_dir, MakeCheckpoint(builder, completed, i, report));
       writing += Seconds(write_start);
       GLAM_LOG_INFO("submap {} completed: frames {}-{}, {} keyframes, {} landmarks", submap.id,
@@ -216,7 +220,10 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
       cancel.ThrowIfCancelled();
       alignment.RethrowIfFailed();
       std::optional<FrameFeatures> item = queue.PopFor(std::chrono::milliseconds(100));
-      if (state.revision != alignment.revision()) emit(true);  // a new map revision
+      if (state.revision != alignment.revision()) {  // a new map revision
+        tiles.OnRevision(*aligner.snapshot());
+        emit(true);
+      }
       if (!item) {
         if (queue.IsClosed() && queue.Size() == 0) break;
         continue;
@@ -262,6 +269,8 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   const auto write_start = Clock::now();
   const std::shared_ptr<const MapSnapshot> snapshot = aligner.snapshot();
   const MapExportCounts exported = ExportWorldMap(*snapshot, submaps_root, out_dir, report.fps);
+  tiles.OnRevision(*snapshot);
+  tiles.WriteMapGlb(*snapshot, submaps_root);
   WriteJson(out_dir / "graph.json", aligner.GraphJson());
   writing += Seconds(write_start);
 

@@ -19,7 +19,10 @@
 #include "engine/export/tum_trajectory.h"
 #include "engine/map/submap_io.h"
 #include "engine/pipeline/mapping_job.h"
+#include "tests/export/glb_test_util.h"
 #include "tools/eval/evaluation.h"
+#include "tools/eval/ground_truth_surface.h"
+#include "tools/eval/map_metrics.h"
 
 namespace glam {
 namespace {
@@ -177,6 +180,36 @@ TEST(GlobalAlignment, LoopFlightFindsTheLoopEdgeWithoutFalseEdgesAndIsAccurate) 
   GLAM_LOG_INFO("loop flight: {} | path {:.0f} m", eval::Summary(result), path);
   EXPECT_GE(result.trajectory.fraction_posed, 0.95);
   EXPECT_LT(result.trajectory.ate_rmse, 0.003 * path);
+
+  // The map as the viewer gets it: tileset.json + Draco tiles. Child transforms are the
+  // graph's world_from_submap, and the decoded tile points, placed by them, lie on the true
+  // surface as well as points.ply does.
+  const nlohmann::json tileset = ReadJson(out / "tileset.json");
+  EXPECT_EQ(tileset.at("extras").at("revision").get<std::int64_t>(), report.revision);
+  std::vector<ColoredPoint> tile_points;
+  for (const nlohmann::json& child : tileset.at("root").at("children")) {
+    const std::uint32_t id = child.at("extras").at("submap").get<std::uint32_t>();
+    Eigen::Matrix4d world_from_submap;
+    for (int k = 0; k < 16; ++k) world_from_submap(k % 4, k / 4) = child.at("transform").at(k).get<double>();
+    for (const nlohmann::json& node : graph.at("nodes")) {
+      if (node.at("id").get<std::uint32_t>() != id) continue;
+      EXPECT_LT((world_from_submap - Sim3FromRows(node.at("world_from_submap")).matrix()).norm(), 1e-6);
+    }
+    const tinygltf::Model model = testing::ParseGlb(
+        testing::ReadBytes(out / child.at("content").at("uri").get<std::string>()));
+    for (ColoredPoint p : testing::DecodeDracoPoints(model)) {
+      p.position = (world_from_submap * p.position.cast<double>().homogeneous()).head<3>().cast<float>();
+      tile_points.push_back(p);
+    }
+  }
+  ASSERT_EQ(static_cast<std::int64_t>(tile_points.size()), report.points);
+  const eval::HeightfieldSurface surface = eval::HeightfieldSurface::Load(kClip / "gt_surface.json");
+  const eval::MapMetrics tiles_map =
+      eval::EvaluateMap(tile_points, result.trajectory.gt_from_estimate, surface);
+  ASSERT_TRUE(result.map.has_value());
+  GLAM_LOG_INFO("tiles: median {:.3f} m, points.ply: median {:.3f} m", tiles_map.median,
+                result.map->median);
+  EXPECT_LT(tiles_map.median, result.map->median + 0.01);
 }
 
 TEST(GlobalAlignment, SubmapsAfterAHardCutAreLinkedBackByTheVocabularyTree) {

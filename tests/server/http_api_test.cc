@@ -16,6 +16,8 @@
 
 #include "api/job_service.h"
 #include "engine/core/error.h"
+#include "engine/map/submap_io.h"
+#include "engine/pipeline/tile_writer.h"
 #include "server/http_server.h"
 #include "tests/server/server_test_util.h"
 
@@ -202,6 +204,101 @@ TEST_F(HttpApiTest, UploadFollowEventsAndDownload) {
   const json page = json::parse(res->body);
   EXPECT_EQ(page["total"], 1);
   EXPECT_EQ(page["jobs"][0]["id"], id);
+}
+
+// Map tiles written by the engine's TileWriter into a job directory are served as they appear:
+// tiles immutable, tileset.json revalidated by ETag and replaced per revision, the quantized
+// variants by ?format=quantized (and under the names the quantized tileset's URIs use).
+TEST_F(HttpApiTest, MapTilesTilesetAndFormatsAreServed) {
+  Start({}, "tiles");
+  auto client = Client();
+  const std::string id = CreateJob(client);
+  FollowToEnd(client, id);
+  const fs::path job_dir = dir_ / "data" / "jobs" / id;
+  const std::string base = "/api/v1/jobs/" + id + "/";
+  ExpectError(client.Get(base + "tileset.json?format=quantized"), 404, "not_available", "no tileset yet");
+
+  Submap submap;
+  submap.id = 0;
+  submap.last_frame = 9;
+  for (int i = 0; i < 50; ++i) {
+    Landmark lm;
+    lm.point_in_submap = Eigen::Vector3d(i % 10, i / 10, 0.1 * i);
+    lm.color = {static_cast<std::uint8_t>(i), 100, 200};
+    submap.landmarks.push_back(lm);
+  }
+  WriteSubmap(submap, job_dir / "submaps");
+  TileWriter tiles(job_dir);
+  tiles.OnSubmapCompleted(submap);
+  MapSnapshot snapshot;
+  snapshot.revision = 1;
+  snapshot.submaps.push_back(SubmapPlacement{});
+  tiles.OnRevision(snapshot);
+
+  auto res = client.Get(base + "tiles/0.glb");
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 200);
+  EXPECT_EQ(res->body, glam::testing::ReadFile(job_dir / "tiles" / "0.glb"));
+  EXPECT_EQ(res->body.substr(0, 4), "glTF");
+  EXPECT_EQ(res->get_header_value("Content-Type"), "model/gltf-binary");
+  EXPECT_NE(res->get_header_value("Cache-Control").find("immutable"), std::string::npos);
+  const std::string quantized_tile = glam::testing::ReadFile(job_dir / "tiles" / "0.quantized.glb");
+  EXPECT_NE(quantized_tile, res->body);
+  res = client.Get(base + "tiles/0.glb?format=quantized");
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 200);
+  EXPECT_EQ(res->body, quantized_tile);
+  EXPECT_NE(res->get_header_value("Cache-Control").find("immutable"), std::string::npos);
+  res = client.Get(base + "tiles/0.glb?format=draco");
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->body, glam::testing::ReadFile(job_dir / "tiles" / "0.glb"));
+  ExpectError(client.Get(base + "tiles/0.glb?format=obj"), 400, "bad_request", "unknown format");
+  ExpectError(client.Get(base + "tiles/1.glb?format=quantized"), 404, "not_available", "tile not written");
+  ExpectError(client.Get(base + "tiles/x.quantized.glb"), 400, "bad_request", "bad quantized tile name");
+
+  res = client.Get(base + "tileset.json");
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 200);
+  EXPECT_EQ(res->get_header_value("Content-Type"), "application/json");
+  EXPECT_EQ(res->get_header_value("Cache-Control"), "no-cache");
+  const std::string etag = res->get_header_value("ETag");
+  ASSERT_FALSE(etag.empty());
+  json tileset = json::parse(res->body);
+  EXPECT_EQ(tileset["extras"]["revision"], 1);
+  EXPECT_EQ(tileset["root"]["children"][0]["content"]["uri"], "tiles/0.glb");
+  res = client.Get(base + "tileset.json", {{"If-None-Match", etag}});
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 304);
+
+  // Every content URI of the quantized tileset, resolved against the tileset's URL, is served.
+  res = client.Get(base + "tileset.json?format=quantized");
+  ASSERT_TRUE(res);
+  ASSERT_EQ(res->status, 200);
+  const json quantized = json::parse(res->body);
+  ASSERT_EQ(quantized["root"]["children"].size(), 1u);
+  const std::string uri = quantized["root"]["children"][0]["content"]["uri"];
+  res = client.Get(base + uri);
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 200) << uri;
+  EXPECT_EQ(res->body, quantized_tile);
+
+  // A new revision replaces the tileset: the old ETag no longer matches.
+  snapshot.revision = 2;
+  snapshot.submaps[0].world_from_submap = Sim3(2.0, SO3(), Eigen::Vector3d(1, 2, 3));
+  tiles.OnRevision(snapshot);
+  res = client.Get(base + "tileset.json", {{"If-None-Match", etag}});
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 200);
+  tileset = json::parse(res->body);
+  EXPECT_EQ(tileset["asset"]["tilesetVersion"], "2");
+  EXPECT_EQ(tileset["root"]["children"][0]["transform"][0], 2.0);
+
+  EXPECT_EQ(tiles.WriteMapGlb(snapshot, job_dir / "submaps"), 50);
+  res = client.Get(base + "map.glb");
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 200);
+  EXPECT_EQ(res->get_header_value("Cache-Control"), "no-cache");
+  EXPECT_EQ(res->body, glam::testing::ReadFile(job_dir / "map.glb"));
 }
 
 TEST_F(HttpApiTest, RawBodyUploadTakesOptionsFromQuery) {

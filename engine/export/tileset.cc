@@ -1,0 +1,89 @@
+#include "engine/export/tileset.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+
+namespace glam {
+namespace {
+
+using nlohmann::json;
+
+// A box with zero extent along an axis (a flat or single-point tile) confuses culling in some
+// clients; give every half axis at least this fraction of the box diagonal (or 1 mm-ish in
+// the frame's units for a single point).
+double MinHalfSize(const Eigen::AlignedBox3d& box) {
+  return std::max(1e-6 * box.diagonal().norm(), 1e-3);
+}
+
+json Box(const Eigen::AlignedBox3d& box) {
+  const Eigen::Vector3d c = box.center();
+  const double floor_half = MinHalfSize(box);
+  const Eigen::Vector3d h = (0.5 * box.sizes()).cwiseMax(floor_half);
+  return json::array({c.x(), c.y(), c.z(), h.x(), 0.0, 0.0, 0.0, h.y(), 0.0, 0.0, 0.0, h.z()});
+}
+
+}  // namespace
+
+std::string TileFileName(std::uint32_t submap_id, TileVariant variant) {
+  return variant == TileVariant::kDraco ? fmt::format("tiles/{}.glb", submap_id)
+                                        : fmt::format("tiles/{}.quantized.glb", submap_id);
+}
+
+std::string TilesetFileName(TileVariant variant) {
+  return variant == TileVariant::kDraco ? "tileset.json" : "tileset.quantized.json";
+}
+
+json ColumnMajor(const Eigen::Matrix4d& m) {
+  json out = json::array();
+  for (int col = 0; col < 4; ++col) {
+    for (int row = 0; row < 4; ++row) out.push_back(m(row, col));
+  }
+  return out;
+}
+
+json BuildTileset(const MapSnapshot& snapshot, const std::map<std::uint32_t, Eigen::AlignedBox3d>& bounds,
+                  TileVariant variant) {
+  json children = json::array();
+  Eigen::AlignedBox3d world;  // root box: the children's boxes after their transforms
+  for (const SubmapPlacement& placement : snapshot.submaps) {
+    const auto found = bounds.find(placement.id);
+    if (found == bounds.end() || found->second.isEmpty()) continue;
+    const Eigen::AlignedBox3d& box = found->second;
+    const double floor_half = MinHalfSize(box);
+    const Eigen::AlignedBox3d padded(box.min().array() - floor_half, box.max().array() + floor_half);
+    for (int k = 0; k < 8; ++k) {
+      world.extend(placement.world_from_submap * padded.corner(static_cast<Eigen::AlignedBox3d::CornerType>(k)));
+    }
+    json child;
+    child["boundingVolume"] = {{"box", Box(box)}};
+    child["geometricError"] = 0.0;
+    child["refine"] = "ADD";
+    child["transform"] = ColumnMajor(placement.world_from_submap.matrix());
+    child["content"] = {{"uri", TileFileName(placement.id, variant)}};
+    child["extras"] = {{"submap", placement.id},
+                       {"disconnected", placement.disconnected},
+                       {"first_frame", placement.first_frame},
+                       {"last_frame", placement.last_frame}};
+    children.push_back(std::move(child));
+  }
+  if (world.isEmpty()) world = Eigen::AlignedBox3d(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
+
+  json root;
+  root["boundingVolume"] = {{"box", Box(world)}};
+  // Screen-space error of the (content-less) root: its size, so every client refines into the
+  // children as soon as the map is on screen.
+  root["geometricError"] = std::max(world.diagonal().norm(), 1.0);
+  root["refine"] = "ADD";
+  if (!children.empty()) root["children"] = std::move(children);
+
+  json tileset;
+  tileset["asset"] = {{"version", "1.1"},
+                      {"tilesetVersion", std::to_string(snapshot.revision)}};
+  tileset["geometricError"] = root["geometricError"];
+  tileset["root"] = std::move(root);
+  tileset["extras"] = {{"revision", snapshot.revision}};
+  return tileset;
+}
+
+}  // namespace glam

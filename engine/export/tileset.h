@@ -1,0 +1,48 @@
+// tileset.json (3D Tiles 1.1) of a published MapSnapshot (architecture "Map delivery format",
+// Contracts "Map revision" and "Tiles").
+//
+// Layout: a root without content whose box (world frame) contains every child; one child per
+// submap with content.uri = that submap's tile, transform = world_from_submap as a
+// column-major 4x4 (uniform scale), boundingVolume.box = the tile's axis-aligned bounds in the
+// submap frame (z-up: clients rotate glTF y-up content to z-up before the transform, so the box
+// and the transform are plain submap / world coordinates), geometricError 0 (a leaf holds all
+// the detail there is), refine "ADD" and extras {submap, disconnected, first_frame,
+// last_frame}. asset.tilesetVersion is the revision as a string and extras.revision the number.
+//
+// Because tiles never change after their submap completes, a new alignment result rewrites
+// this small file only. Submaps without a tile box (empty submaps) are left out of the
+// children; the root then still exists (3D Tiles needs one) with a tiny box at the origin
+// when there is no child at all.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <map>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "engine/map/map_snapshot.h"
+
+namespace glam {
+
+enum class TileVariant {
+  kDraco,      // tiles/<id>.glb
+  kQuantized,  // tiles/<id>.quantized.glb (KHR_mesh_quantization, for standard clients)
+};
+
+// Relative to the job / output directory, and the URI used in tileset.json.
+std::string TileFileName(std::uint32_t submap_id, TileVariant variant);
+// tileset.json or tileset.quantized.json.
+std::string TilesetFileName(TileVariant variant);
+
+// 16 numbers, column-major, of world_from_submap.matrix().
+nlohmann::json ColumnMajor(const Eigen::Matrix4d& m);
+
+// `bounds`: submap id -> axis-aligned box of its tile in the submap frame (TileBounds).
+nlohmann::json BuildTileset(const MapSnapshot& snapshot,
+                            const std::map<std::uint32_t, Eigen::AlignedBox3d>& bounds,
+                            TileVariant variant);
+
+}  // namespace glam

@@ -1,0 +1,122 @@
+#include "engine/pipeline/tile_writer.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <map>
+
+#include "engine/core/atomic_file.h"
+#include "engine/core/error.h"
+#include "engine/core/logging.h"
+#include "engine/export/tileset.h"
+#include "engine/map/submap_io.h"
+
+namespace glam {
+namespace {
+
+std::vector<Eigen::Vector3d> CameraCentres(const Submap& submap) {
+  std::vector<const FramePose*> poses;
+  poses.reserve(submap.frame_poses.size());
+  for (const FramePose& fp : submap.frame_poses) poses.push_back(&fp);
+  std::stable_sort(poses.begin(), poses.end(),
+                   [](const FramePose* a, const FramePose* b) { return a->frame_index < b->frame_index; });
+  std::vector<Eigen::Vector3d> centres;
+  centres.reserve(poses.size());
+  for (const FramePose* fp : poses) centres.push_back(fp->cam_from_submap.Inverse().translation());
+  return centres;
+}
+
+}  // namespace
+
+TileGeometry SubmapTileGeometry(const Submap& submap) {
+  TileGeometry geometry;
+  geometry.points.reserve(submap.landmarks.size());
+  for (const Landmark& lm : submap.landmarks) {
+    ColoredPoint p;
+    p.position = lm.point_in_submap.cast<float>();
+    p.color = lm.color;
+    geometry.points.push_back(p);
+  }
+  for (const Eigen::Vector3d& c : CameraCentres(submap)) geometry.trajectory.push_back(c.cast<float>());
+  return geometry;
+}
+
+TileWriter::TileWriter(std::filesystem::path out_dir, DracoTileOptions draco)
+    : out_dir_(std::move(out_dir)), draco_(draco) {
+  draco_.Check();
+  std::error_code ec;
+  std::filesystem::create_directories(out_dir_ / "tiles", ec);
+  if (ec) {
+    throw EnvironmentError(fmt::format("cannot create {}: {}", (out_dir_ / "tiles").string(), ec.message()));
+  }
+}
+
+void TileWriter::WriteTiles(const Submap& submap, bool only_missing) {
+  const TileGeometry geometry = SubmapTileGeometry(submap);
+  const std::filesystem::path draco_path = out_dir_ / TileFileName(submap.id, TileVariant::kDraco);
+  const std::filesystem::path quantized_path = out_dir_ / TileFileName(submap.id, TileVariant::kQuantized);
+  if (!only_missing || !std::filesystem::exists(draco_path)) {
+    WriteFileAtomically(draco_path, EncodeDracoTileGlb(geometry, draco_));
+  }
+  if (!only_missing || !std::filesystem::exists(quantized_path)) {
+    WriteFileAtomically(quantized_path, EncodeQuantizedTileGlb(geometry));
+  }
+  bounds_[submap.id] = geometry.points.empty() ? Eigen::AlignedBox3d() : TileBounds(geometry);
+}
+
+void TileWriter::OnSubmapCompleted(const Submap& submap) {
+  std::lock_guard lock(mutex_);
+  WriteTiles(submap, false);
+  GLAM_LOG_DEBUG("tile of submap {} written ({} points)", submap.id, submap.landmarks.size());
+}
+
+void TileWriter::OnRevision(const MapSnapshot& snapshot) {
+  std::lock_guard lock(mutex_);
+  if (snapshot.revision <= last_revision_) return;
+  for (const SubmapPlacement& placement : snapshot.submaps) {
+    if (bounds_.count(placement.id) != 0) continue;
+    // Completed in an earlier run of a resumed job: read it back once.
+    try {
+      WriteTiles(ReadSubmap(out_dir_ / "submaps", placement.id), true);
+    } catch (const InputError& e) {
+      GLAM_LOG_WARN("submap {} has no tile: {}", placement.id, e.what());
+      bounds_[placement.id] = Eigen::AlignedBox3d();
+    }
+  }
+  for (const TileVariant variant : {TileVariant::kDraco, TileVariant::kQuantized}) {
+    WriteFileAtomically(out_dir_ / TilesetFileName(variant), BuildTileset(snapshot, bounds_, variant).dump(1));
+  }
+  last_revision_ = snapshot.revision;
+}
+
+std::int64_t TileWriter::WriteMapGlb(const MapSnapshot& snapshot, const std::filesystem::path& submaps_root) {
+  TileGeometry world;
+  std::map<std::int64_t, Eigen::Vector3f> centres;  // frame index -> camera centre (first submap wins)
+  for (const SubmapPlacement& placement : snapshot.submaps) {
+    if (placement.disconnected) continue;
+    const Submap submap = ReadSubmap(submaps_root, placement.id);
+    world.points.reserve(world.points.size() + submap.landmarks.size());
+    for (const Landmark& lm : submap.landmarks) {
+      ColoredPoint p;
+      p.position = (placement.world_from_submap * lm.point_in_submap).cast<float>();
+      p.color = lm.color;
+      world.points.push_back(p);
+    }
+    for (const FramePose& fp : submap.frame_poses) {
+      const Eigen::Vector3d centre = placement.world_from_submap * fp.cam_from_submap.Inverse().translation();
+      centres.try_emplace(fp.frame_index, centre.cast<float>());
+    }
+  }
+  for (const auto& [index, centre] : centres) world.trajectory.push_back(centre);
+  const std::string glb = EncodeDracoTileGlb(world, draco_);
+  std::lock_guard lock(mutex_);
+  WriteFileAtomically(out_dir_ / "map.glb", glb);
+  return static_cast<std::int64_t>(world.points.size());
+}
+
+std::int64_t TileWriter::last_revision_written() const {
+  std::lock_guard lock(mutex_);
+  return last_revision_;
+}
+
+}  // namespace glam

@@ -1,0 +1,274 @@
+// The pipeline's TileWriter on synthetic submaps: tiles are written once per completed submap
+// and never change afterwards, each revision rewrites tileset.json (both variants) atomically,
+// points read back from a written tile and carried by the tileset's transform land at
+// world_from_submap * point_in_submap, a resumed writer recovers earlier submaps from disk,
+// map.glb holds the connected submaps in world frame, an empty submap is handled, and a
+// reader polling tileset.json during rewrites never sees half a file.
+#include <atomic>
+#include <cmath>
+#include <random>
+#include <thread>
+
+#include <gtest/gtest.h>
+
+#include "engine/export/tileset.h"
+#include "engine/map/submap_io.h"
+#include "engine/pipeline/tile_writer.h"
+#include "tests/export/glb_test_util.h"
+
+namespace glam {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+Submap MakeSubmap(std::uint32_t id, int landmarks, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1, 1);
+  Submap s;
+  s.id = id;
+  s.first_frame = 50 * id;
+  s.last_frame = 50 * id + 59;
+  for (int i = 0; i < landmarks; ++i) {
+    Landmark lm;
+    lm.id = static_cast<std::uint32_t>(i);
+    lm.point_in_submap = Eigen::Vector3d(30 * u(rng), 20 * u(rng), 0.5 * u(rng) - 10);
+    lm.color = {static_cast<std::uint8_t>(i & 0xff), static_cast<std::uint8_t>(i >> 8), static_cast<std::uint8_t>(id)};
+    s.landmarks.push_back(lm);
+  }
+  for (std::int64_t f = s.first_frame; f <= s.last_frame; ++f) {
+    FramePose fp;
+    fp.frame_index = f;
+    // Camera looking down from 10 units above the ground: cam_from_submap = (R, -R c).
+    const Eigen::Vector3d centre(0.3 * static_cast<double>(f - s.first_frame), 0, 0);
+    const SO3 R(Eigen::Matrix3d(Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX())));
+    fp.cam_from_submap = SE3(R, -(R.matrix() * centre));
+    s.frame_poses.push_back(fp);
+  }
+  return s;
+}
+
+SubmapPlacement Place(std::uint32_t id, double scale, double yaw, Eigen::Vector3d t, bool disconnected = false) {
+  SubmapPlacement p;
+  p.id = id;
+  p.world_from_submap = Sim3(scale, SO3(Eigen::Matrix3d(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()))), t);
+  p.disconnected = disconnected;
+  p.first_frame = 50 * id;
+  p.last_frame = 50 * id + 59;
+  return p;
+}
+
+json ReadJson(const fs::path& path) { return json::parse(glam::testing::ReadBytes(path)); }
+
+Eigen::Matrix4d FromColumnMajor(const json& a) {
+  Eigen::Matrix4d m;
+  for (int col = 0; col < 4; ++col) {
+    for (int row = 0; row < 4; ++row) m(row, col) = a[static_cast<std::size_t>(col * 4 + row)].get<double>();
+  }
+  return m;
+}
+
+// Reads tile `id` from disk as a 3D Tiles client would (quantized variant: dequantize, y-up ->
+// z-up happens in DequantizePoints) and places its points with the tileset's transform; every
+// source landmark (matched by its colour) must land at world_from_submap * point_in_submap.
+void ExpectTilePlacedInWorld(const fs::path& dir, const json& tileset, const Submap& submap,
+                             const SubmapPlacement& placement) {
+  const json* child = nullptr;
+  for (const json& c : tileset["root"]["children"]) {
+    if (c["extras"]["submap"] == submap.id) child = &c;
+  }
+  ASSERT_NE(child, nullptr);
+  const Eigen::Matrix4d transform = FromColumnMajor((*child)["transform"]);
+  const std::string uri = (*child)["content"]["uri"];
+  const tinygltf::Model model = glam::testing::ParseGlb(glam::testing::ReadBytes(dir / uri));
+  const bool quantized = uri.find(".quantized.") != std::string::npos;
+  const std::vector<ColoredPoint> points =
+      quantized ? glam::testing::DequantizePoints(model) : glam::testing::DecodeDracoPoints(model);
+  ASSERT_EQ(points.size(), submap.landmarks.size());
+  for (const ColoredPoint& p : points) {
+    const std::size_t index = p.color[0] | (static_cast<std::size_t>(p.color[1]) << 8);
+    ASSERT_LT(index, submap.landmarks.size());
+    const Eigen::Vector3d want = placement.world_from_submap * submap.landmarks[index].point_in_submap;
+    const Eigen::Vector3d got = (transform * p.position.cast<double>().homogeneous()).head<3>();
+    // Quantisation (<= 60 / 2^15 per coordinate here) times the scale.
+    EXPECT_LE((got - want).norm(), 5e-3 * placement.world_from_submap.scale()) << uri;
+  }
+}
+
+TEST(TileWriter, TilesOnceTilesetPerRevisionPointsLandInTheWorld) {
+  const fs::path dir = glam::testing::FreshTempDir("tile_writer");
+  TileWriter writer(dir);
+  const std::vector<Submap> submaps = {MakeSubmap(0, 800, 1), MakeSubmap(1, 600, 2)};
+  writer.OnSubmapCompleted(submaps[0]);
+  writer.OnSubmapCompleted(submaps[1]);
+  for (const char* name : {"tiles/0.glb", "tiles/0.quantized.glb", "tiles/1.glb", "tiles/1.quantized.glb"}) {
+    EXPECT_TRUE(fs::is_regular_file(dir / name)) << name;
+  }
+  EXPECT_FALSE(fs::exists(dir / "tileset.json"));
+  const std::string tile0 = glam::testing::ReadBytes(dir / "tiles/0.glb");
+  const auto tile0_time = fs::last_write_time(dir / "tiles/0.glb");
+
+  MapSnapshot rev1;
+  rev1.revision = 1;
+  rev1.submaps = {Place(0, 1.0, 0.0, Eigen::Vector3d::Zero()), Place(1, 1.7, 0.4, Eigen::Vector3d(20, 5, 1))};
+  writer.OnRevision(rev1);
+  json tileset = ReadJson(dir / "tileset.json");
+  EXPECT_EQ(tileset["asset"]["tilesetVersion"], "1");
+  for (std::size_t i = 0; i < 2; ++i) ExpectTilePlacedInWorld(dir, tileset, submaps[i], rev1.submaps[i]);
+  const json quantized = ReadJson(dir / "tileset.quantized.json");
+  for (std::size_t i = 0; i < 2; ++i) ExpectTilePlacedInWorld(dir, quantized, submaps[i], rev1.submaps[i]);
+
+  // The trajectory in the tile is the submap's camera centres.
+  const std::vector<Eigen::Vector3f> trajectory =
+      glam::testing::TrajectoryPoints(glam::testing::ParseGlb(glam::testing::ReadBytes(dir / "tiles/1.glb")));
+  ASSERT_EQ(trajectory.size(), submaps[1].frame_poses.size());
+  EXPECT_LE((trajectory[7] - Eigen::Vector3f(0.3f * 7, 0, 0)).norm(), 1e-5f);
+
+  // An old or repeated revision writes nothing.
+  const auto tileset_time = fs::last_write_time(dir / "tileset.json");
+  MapSnapshot stale = rev1;
+  stale.submaps[1].world_from_submap = Sim3();
+  writer.OnRevision(stale);
+  EXPECT_EQ(fs::last_write_time(dir / "tileset.json"), tileset_time);
+  EXPECT_EQ(ReadJson(dir / "tileset.json"), tileset);
+
+  // A loop closure moves submap 1: new tileset, same tiles, points at the new place.
+  MapSnapshot rev2 = rev1;
+  rev2.revision = 2;
+  rev2.submaps[1] = Place(1, 0.8, -1.2, Eigen::Vector3d(-7, 30, 2));
+  writer.OnRevision(rev2);
+  tileset = ReadJson(dir / "tileset.json");
+  EXPECT_EQ(tileset["extras"]["revision"], 2);
+  ExpectTilePlacedInWorld(dir, tileset, submaps[1], rev2.submaps[1]);
+  EXPECT_EQ(glam::testing::ReadBytes(dir / "tiles/0.glb"), tile0);
+  EXPECT_EQ(fs::last_write_time(dir / "tiles/0.glb"), tile0_time);
+  EXPECT_EQ(writer.last_revision_written(), 2);
+  for (const auto& entry : fs::recursive_directory_iterator(dir)) {
+    EXPECT_NE(entry.path().extension(), ".tmp") << entry.path();
+  }
+  fs::remove_all(dir);
+}
+
+TEST(TileWriter, ResumedWriterRecoversEarlierSubmapsFromDisk) {
+  const fs::path dir = glam::testing::FreshTempDir("tile_writer_resume");
+  const std::vector<Submap> submaps = {MakeSubmap(0, 300, 5), MakeSubmap(1, 300, 6), MakeSubmap(2, 300, 7)};
+  for (const Submap& s : submaps) WriteSubmap(s, dir / "submaps");
+  {
+    TileWriter first(dir);
+    first.OnSubmapCompleted(submaps[0]);
+  }
+  const std::string tile0 = glam::testing::ReadBytes(dir / "tiles/0.glb");
+  const auto tile0_time = fs::last_write_time(dir / "tiles/0.glb");
+  TileWriter resumed(dir);  // knows nothing about submaps 0 and 1
+  resumed.OnSubmapCompleted(submaps[2]);
+  MapSnapshot snapshot;
+  snapshot.revision = 5;
+  snapshot.submaps = {Place(0, 1, 0, Eigen::Vector3d::Zero()), Place(1, 1.1, 0.2, Eigen::Vector3d(30, 0, 0)),
+                      Place(2, 0.9, 0.3, Eigen::Vector3d(60, 0, 0))};
+  resumed.OnRevision(snapshot);
+  const json tileset = ReadJson(dir / "tileset.json");
+  ASSERT_EQ(tileset["root"]["children"].size(), 3u);
+  for (std::size_t i = 0; i < 3; ++i) ExpectTilePlacedInWorld(dir, tileset, submaps[i], snapshot.submaps[i]);
+  // Tile 0 existed and was kept as it was; tile 1 was missing and has been written.
+  EXPECT_EQ(fs::last_write_time(dir / "tiles/0.glb"), tile0_time);
+  EXPECT_EQ(glam::testing::ReadBytes(dir / "tiles/0.glb"), tile0);
+  EXPECT_TRUE(fs::is_regular_file(dir / "tiles/1.quantized.glb"));
+  fs::remove_all(dir);
+}
+
+TEST(TileWriter, MapGlbHoldsTheConnectedSubmapsInWorldFrame) {
+  const fs::path dir = glam::testing::FreshTempDir("tile_writer_map");
+  const std::vector<Submap> submaps = {MakeSubmap(0, 400, 8), MakeSubmap(1, 300, 9), MakeSubmap(2, 200, 10)};
+  for (const Submap& s : submaps) WriteSubmap(s, dir / "submaps");
+  MapSnapshot snapshot;
+  snapshot.revision = 3;
+  snapshot.submaps = {Place(0, 1, 0, Eigen::Vector3d::Zero()), Place(1, 1.3, 0.5, Eigen::Vector3d(25, 3, 0)),
+                      Place(2, 1, 0, Eigen::Vector3d(90, 0, 0), /*disconnected=*/true)};
+  TileWriter writer(dir);
+  EXPECT_EQ(writer.WriteMapGlb(snapshot, dir / "submaps"), 700);
+  const tinygltf::Model model = glam::testing::ParseGlb(glam::testing::ReadBytes(dir / "map.glb"));
+  const std::vector<ColoredPoint> points = glam::testing::DecodeDracoPoints(model);
+  ASSERT_EQ(points.size(), 700u);
+  std::vector<ColoredPoint> world;
+  for (std::size_t i = 0; i < 2; ++i) {
+    for (const Landmark& lm : submaps[i].landmarks) {
+      ColoredPoint p;
+      p.position = (snapshot.submaps[i].world_from_submap * lm.point_in_submap).cast<float>();
+      p.color = lm.color;
+      world.push_back(p);
+    }
+  }
+  const double bound = DracoPositionErrorBound(world, DracoTileOptions{}.position_bits) + 1e-4;
+  for (const ColoredPoint& p : points) {
+    ASSERT_LT(p.color[2], 2) << "a disconnected submap's point is in map.glb";
+    const std::size_t index = p.color[0] | (static_cast<std::size_t>(p.color[1]) << 8);
+    const Eigen::Vector3f want = world[p.color[2] == 0 ? index : 400 + index].position;
+    EXPECT_LE((p.position - want).cwiseAbs().maxCoeff(), bound);
+  }
+  // One camera centre per frame; submaps 0 and 1 overlap in frames 50..59.
+  EXPECT_EQ(glam::testing::TrajectoryPoints(model).size(), 110u);
+  fs::remove_all(dir);
+}
+
+TEST(TileWriter, EmptySubmapGetsValidTilesButNoTilesetChild) {
+  const fs::path dir = glam::testing::FreshTempDir("tile_writer_empty");
+  TileWriter writer(dir);
+  writer.OnSubmapCompleted(MakeSubmap(0, 100, 1));
+  writer.OnSubmapCompleted(MakeSubmap(1, 0, 2));
+  const tinygltf::Model empty = glam::testing::ParseGlb(glam::testing::ReadBytes(dir / "tiles/1.glb"));
+  EXPECT_EQ(glam::testing::FindNode(empty, "points"), -1);
+  EXPECT_GE(glam::testing::FindNode(empty, "trajectory"), 0);
+  const json report = glam::testing::ValidateGltf(dir / "tiles/1.quantized.glb");
+  ASSERT_FALSE(report.is_null());
+  EXPECT_EQ(report["issues"]["numErrors"], 0) << report.dump(1);
+  MapSnapshot snapshot;
+  snapshot.revision = 1;
+  snapshot.submaps = {Place(0, 1, 0, Eigen::Vector3d::Zero()), Place(1, 1, 0, Eigen::Vector3d(10, 0, 0))};
+  writer.OnRevision(snapshot);
+  const json tileset = ReadJson(dir / "tileset.json");
+  ASSERT_EQ(tileset["root"]["children"].size(), 1u);
+  EXPECT_EQ(tileset["root"]["children"][0]["extras"]["submap"], 0);
+  fs::remove_all(dir);
+}
+
+TEST(TileWriter, ReadersNeverSeeAHalfWrittenTileset) {
+  const fs::path dir = glam::testing::FreshTempDir("tile_writer_atomic");
+  TileWriter writer(dir);
+  MapSnapshot snapshot;
+  for (std::uint32_t id = 0; id < 40; ++id) {
+    writer.OnSubmapCompleted(MakeSubmap(id, 20, id));
+    snapshot.submaps.push_back(Place(id, 1, 0.1 * id, Eigen::Vector3d(10.0 * id, 0, 0)));
+  }
+  snapshot.revision = 1;
+  writer.OnRevision(snapshot);
+  std::atomic<bool> done{false};
+  int reads = 0, bad = 0;
+  std::int64_t last_seen = 0;
+  std::thread reader([&] {
+    while (!done) {
+      const json t = json::parse(glam::testing::ReadBytes(dir / "tileset.json"), nullptr, false);
+      ++reads;
+      if (t.is_discarded() || t["root"]["children"].size() != 40) {
+        ++bad;
+        continue;
+      }
+      const std::int64_t revision = t["extras"]["revision"];
+      if (revision < last_seen) ++bad;  // revisions only grow
+      last_seen = revision;
+    }
+  });
+  for (int r = 2; r <= 150; ++r) {
+    snapshot.revision = r;
+    snapshot.submaps[5].world_from_submap = Sim3(1.0 + 0.01 * r, SO3(), Eigen::Vector3d::Zero());
+    writer.OnRevision(snapshot);
+  }
+  done = true;
+  reader.join();
+  EXPECT_GT(reads, 0);
+  EXPECT_EQ(bad, 0) << "of " << reads << " reads";
+  EXPECT_EQ(ReadJson(dir / "tileset.json")["extras"]["revision"], 150);
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace glam
