@@ -100,6 +100,22 @@ std::vector<Eigen::Vector3f> PositionsOf(const std::vector<ColoredPoint>& points
   return out;
 }
 
+// A mesh with one primitive and the node that places it; mesh and node share the name (tests
+// and viewers find "points" / "trajectory" by it).
+void AddMeshNode(tinygltf::Model& model, const std::string& name, const tinygltf::Primitive& primitive,
+                 std::vector<double> translation = {}, std::vector<double> scale = {}) {
+  tinygltf::Mesh mesh;
+  mesh.name = name;
+  mesh.primitives.push_back(primitive);
+  model.meshes.push_back(mesh);
+  tinygltf::Node node;
+  node.name = name;
+  node.mesh = static_cast<int>(model.meshes.size() - 1);
+  node.translation = std::move(translation);
+  node.scale = std::move(scale);
+  model.nodes.push_back(node);
+}
+
 // The trajectory as a LINE_STRIP mesh + node (float positions; a few hundred vertices, not
 // worth compressing). Needs 2 or more centres.
 void AddTrajectory(tinygltf::Model& model, const std::vector<Eigen::Vector3f>& trajectory) {
@@ -118,28 +134,12 @@ void AddTrajectory(tinygltf::Model& model, const std::vector<Eigen::Vector3f>& t
   primitive.mode = TINYGLTF_MODE_LINE_STRIP;
   primitive.attributes["POSITION"] = accessor;
   primitive.material = static_cast<int>(model.materials.size() - 1);
-  tinygltf::Mesh mesh;
-  mesh.name = "trajectory";
-  mesh.primitives.push_back(primitive);
-  model.meshes.push_back(mesh);
-  tinygltf::Node node;
-  node.name = "trajectory";
-  node.mesh = static_cast<int>(model.meshes.size() - 1);
-  model.nodes.push_back(node);
+  AddMeshNode(model, "trajectory", primitive);
 }
 
 void AddPointsNode(tinygltf::Model& model, const tinygltf::Primitive& primitive,
                    std::vector<double> translation = {}, std::vector<double> scale = {}) {
-  tinygltf::Mesh mesh;
-  mesh.name = "points";
-  mesh.primitives.push_back(primitive);
-  model.meshes.push_back(mesh);
-  tinygltf::Node node;
-  node.name = "points";
-  node.mesh = static_cast<int>(model.meshes.size() - 1);
-  node.translation = std::move(translation);
-  node.scale = std::move(scale);
-  model.nodes.push_back(node);
+  AddMeshNode(model, "points", primitive, std::move(translation), std::move(scale));
 }
 
 std::string Serialize(tinygltf::Model& model) {
