@@ -65,6 +65,11 @@ SubmapAligner::SubmapAligner(const VocabularyTree& vocabulary, const AlignerOpti
   options_.Check();
 }
 
+void SubmapAligner::ContinueRevisionsAfter(std::int64_t revision) {
+  GLAM_CHECK(nodes_.empty() && revision >= 0, "ContinueRevisionsAfter before the first Add");
+  revision_ = revision;
+}
+
 void SubmapAligner::Add(const Submap& submap) {
   const auto start = Clock::now();
   cancel_.ThrowIfCancelled();

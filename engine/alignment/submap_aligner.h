@@ -87,6 +87,11 @@ class SubmapAligner {
 
   std::shared_ptr<const MapSnapshot> snapshot() const;
 
+  // Revisions must only grow for a job's readers (SSE clients, cached tilesets), also across a
+  // resumed run that re-adds its persisted submaps: the next snapshot gets `revision` + 1.
+  // Only before the first Add.
+  void ContinueRevisionsAfter(std::int64_t revision);
+
   // For reports, after the last Add.
   const std::vector<AlignmentEdge>& edges() const { return edges_; }
   const std::vector<SubmapAlignmentTiming>& timings() const { return timings_; }

@@ -157,6 +157,9 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   SubmapBuilder builder(intrinsics, options.submap, cancel);
   if (resume) builder.ResumeAt(resume->next_submap_id);
   SubmapAligner aligner(vocabulary, options.alignment, submaps_root, cancel);
+  // Each published revision aligned at most one submap, so the interrupted run never got past
+  // revision next_submap_id: continuing after it keeps revisions growing for the job's readers.
+  if (resume) aligner.ContinueRevisionsAfter(resume->next_submap_id);
   AlignmentThread alignment(aligner, options.alignment_queue_capacity);
   if (resume) {
     // Thread 2 rebuilds its database and graph from the persisted submaps.

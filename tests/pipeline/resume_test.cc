@@ -1,7 +1,9 @@
 // A run interrupted after some submaps continues from its checkpoint (MappingOptions::resume):
 // it starts decoding where the open submap began, keeps the persisted submaps (their files are
 // not rewritten), re-aligns them, and ends with a map as accurate as an uninterrupted run.
+#include <algorithm>
 #include <filesystem>
+#include <limits>
 
 #include <gtest/gtest.h>
 
@@ -33,7 +35,9 @@ TEST(ResumeMapping, InterruptedRunContinuesFromItsCheckpointAndIsAccurate) {
 
   // First run: cancelled as soon as two submaps are on disk.
   CancellationToken cancel;
+  std::int64_t first_run_revision = 0;
   auto stop_after_two = [&](const MappingProgress& p) {
+    first_run_revision = std::max(first_run_revision, p.revision);
     if (p.submaps_completed >= 2) cancel.Cancel();
   };
   EXPECT_THROW(RunMapping(kClip / "video.mp4", out, DemoOptions(), stop_after_two, cancel), Cancelled);
@@ -50,8 +54,15 @@ TEST(ResumeMapping, InterruptedRunContinuesFromItsCheckpointAndIsAccurate) {
   // Second run resumes.
   MappingOptions options = DemoOptions();
   options.resume = true;
-  const MappingReport report = RunMapping(kClip / "video.mp4", out, options);
+  std::int64_t lowest_revision_after = std::numeric_limits<std::int64_t>::max();
+  auto track = [&](const MappingProgress& p) {
+    if (p.revision > 0) lowest_revision_after = std::min(lowest_revision_after, p.revision);
+  };
+  const MappingReport report = RunMapping(kClip / "video.mp4", out, options, track);
   EXPECT_EQ(report.resumed_from_frame, checkpoint->resume_frame);
+  // Map revisions keep growing across the interruption (readers cache by revision).
+  EXPECT_GT(lowest_revision_after, first_run_revision);
+  EXPECT_GT(report.revision, first_run_revision);
   EXPECT_GT(report.submaps, static_cast<std::int64_t>(checkpoint->next_submap_id));
   EXPECT_EQ(report.disconnected_submaps, 0);
   EXPECT_EQ(fs::last_write_time(SubmapDirectory(out / "submaps", 0) / "submap.bin"), first_written);
