@@ -35,61 +35,6 @@ inline std::uint32_t SquaredDistance(const std::uint8_t* a, const std::uint8_t* 
   return sum;
 }
 
-// The same contract as BinaryReader (binary_io.h), over bytes in memory: the embedded default
-// vocabulary is parsed by the same code as a file.
-class MemoryReader {
- public:
-  MemoryReader(std::span<const std::uint8_t> bytes, std::string_view name, std::string_view magic,
-               std::uint32_t max_version)
-      : bytes_(bytes), name_(name) {
-    if (bytes_.size() < magic.size() || std::memcmp(bytes_.data(), magic.data(), magic.size()) != 0) {
-      throw InputError(fmt::format("{} is not a {} file", name_, magic));
-    }
-    pos_ = magic.size();
-    version_ = Read<std::uint32_t>();
-    if (version_ == 0 || version_ > max_version) {
-      throw InputError(fmt::format("{} has format version {}, this build reads versions 1..{}", name_,
-                                   version_, max_version));
-    }
-  }
-
-  std::uint32_t version() const { return version_; }
-
-  template <typename T>
-  T Read() {
-    T value;
-    ReadArray(&value, 1);
-    return value;
-  }
-  template <typename T>
-  void ReadArray(T* data, std::size_t count) {
-    static_assert(std::is_trivially_copyable_v<T>);
-    const std::size_t n = sizeof(T) * count;
-    if (n > bytes_.size() - pos_) throw InputError(fmt::format("{} is truncated or corrupt", name_));
-    std::memcpy(static_cast<void*>(data), bytes_.data() + pos_, n);
-    pos_ += n;
-  }
-  std::string ReadString() {
-    const auto size = ReadCount(1 << 20);
-    std::string s(size, '\0');
-    ReadArray(s.data(), size);
-    return s;
-  }
-  std::uint32_t ReadCount(std::uint32_t max_count) {
-    const auto n = Read<std::uint32_t>();
-    if (n > max_count) {
-      throw InputError(fmt::format("{} is corrupt: count {} exceeds {}", name_, n, max_count));
-    }
-    return n;
-  }
-
- private:
-  std::span<const std::uint8_t> bytes_;
-  std::string name_;
-  std::size_t pos_ = 0;
-  std::uint32_t version_ = 0;
-};
-
 // k-means of `members` (rows of `data`) into k float centres with k-means++ seeding. OpenCV's
 // kmeans draws from the calling thread's cv::theRNG(); it is seeded per node (so the tree
 // depends only on the seed and the data) and restored afterwards.
@@ -314,23 +259,22 @@ void VocabularyTree::Save(const std::filesystem::path& path) const {
   w.Finish();
 }
 
-template <typename Reader>
-VocabularyTree VocabularyTree::Parse(Reader& r, std::string_view name) {
+VocabularyTree VocabularyTree::Parse(BinaryReader& r, std::string_view name) {
   auto corrupt = [&](const std::string& what) {
     return InputError(fmt::format("{} is not a valid vocabulary: {}", name, what));
   };
   VocabularyTree t;
-  const auto branching = r.template Read<std::uint32_t>();
-  const auto depth = r.template Read<std::uint32_t>();
-  const auto iterations = r.template Read<std::uint32_t>();
+  const auto branching = r.Read<std::uint32_t>();
+  const auto depth = r.Read<std::uint32_t>();
+  const auto iterations = r.Read<std::uint32_t>();
   if (branching < 2 || branching > kMaxBranching) throw corrupt(fmt::format("branching {}", branching));
   if (depth < 1 || depth > kMaxDepth) throw corrupt(fmt::format("depth {}", depth));
   t.branching_ = static_cast<int>(branching);
   t.depth_ = static_cast<int>(depth);
   t.kmeans_iterations_ = static_cast<int>(std::min<std::uint32_t>(iterations, 1u << 30));
-  t.seed_ = r.template Read<std::uint64_t>();
-  t.training_documents_ = r.template Read<std::uint64_t>();
-  t.training_descriptors_ = r.template Read<std::uint64_t>();
+  t.seed_ = r.Read<std::uint64_t>();
+  t.training_documents_ = r.Read<std::uint64_t>();
+  t.training_descriptors_ = r.Read<std::uint64_t>();
   t.description_ = r.ReadString();
 
   const std::uint32_t num_nodes = r.ReadCount(kMaxNodes);
@@ -385,7 +329,7 @@ VocabularyTree VocabularyTree::Load(const std::filesystem::path& path) {
 }
 
 VocabularyTree VocabularyTree::FromBytes(std::span<const std::uint8_t> bytes, std::string_view name) {
-  MemoryReader reader(bytes, name, kMagic, kFormatVersion);
+  BinaryReader reader(bytes, name, kMagic, kFormatVersion);
   return Parse(reader, name);
 }
 

@@ -37,6 +37,8 @@
 
 namespace glam {
 
+class BinaryReader;
+
 struct VocabularyTreeOptions {
   int branching = 10;  // k of every k-means
   int depth = 4;       // levels below the root: up to branching^depth words
@@ -94,8 +96,7 @@ class VocabularyTree {
   static const VocabularyTree& Default();
 
  private:
-  template <typename Reader>
-  static VocabularyTree Parse(Reader& reader, std::string_view name);
+  static VocabularyTree Parse(BinaryReader& reader, std::string_view name);
   std::uint32_t ComputeWordsOfNodes();  // returns the number of words (leaves)
   const std::uint8_t* centre(std::uint32_t node) const { return &centres_[std::size_t{node} * kDescriptorSize]; }
 

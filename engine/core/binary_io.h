@@ -5,9 +5,12 @@
 #pragma once
 
 #include <bit>
+#include <cstring>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <span>
 #include <string>
 #include <string_view>
 #include <type_traits>
@@ -61,40 +64,44 @@ class BinaryWriter {
   std::ofstream out_;
 };
 
+// Reads a whole file (or bytes already in memory, e.g. data embedded in the binary) and parses
+// it from memory: one reader, one set of checks, whatever the source. Every read is bounds
+// checked, so a truncated or corrupt file gives an InputError naming it, never a misread.
 class BinaryReader {
  public:
-  // Opens `path`, checks the magic and returns the version through version(); throws
+  // Reads `path`, checks the magic and returns the version through version(); throws
   // InputError for a missing file, a foreign magic, or a version above `max_version`.
   BinaryReader(const std::filesystem::path& path, std::string_view magic, std::uint32_t max_version)
-      : path_(path), in_(path, std::ios::binary) {
-    if (!in_) throw InputError(fmt::format("cannot open {}", path.string()));
-    char got[8] = {};
-    in_.read(got, 8);
-    if (!in_ || std::string_view(got, 8) != magic) {
-      throw InputError(fmt::format("{} is not a {} file", path.string(), magic));
-    }
-    version_ = Read<std::uint32_t>();
-    if (version_ == 0 || version_ > max_version) {
-      throw InputError(fmt::format("{} has format version {}, this build reads versions 1..{}",
-                                   path.string(), version_, max_version));
-    }
+      : name_(path.string()) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw InputError(fmt::format("cannot open {}", name_));
+    owned_.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    if (in.bad()) throw InputError(fmt::format("cannot read {}", name_));
+    bytes_ = owned_;
+    CheckHeader(magic, max_version);
+  }
+  // The same over `bytes` (not copied: they must outlive the reader); `name` is used in errors.
+  BinaryReader(std::span<const std::uint8_t> bytes, std::string_view name, std::string_view magic,
+               std::uint32_t max_version)
+      : bytes_(bytes), name_(name) {
+    CheckHeader(magic, max_version);
   }
 
   std::uint32_t version() const { return version_; }
 
   template <typename T>
   T Read() {
-    static_assert(std::is_trivially_copyable_v<T>);
     T value;
-    in_.read(reinterpret_cast<char*>(&value), sizeof(T));
-    if (!in_) Truncated();
+    ReadArray(&value, 1);
     return value;
   }
   template <typename T>
   void ReadArray(T* data, std::size_t count) {
     static_assert(std::is_trivially_copyable_v<T>);
-    in_.read(reinterpret_cast<char*>(data), static_cast<std::streamsize>(sizeof(T) * count));
-    if (!in_) Truncated();
+    const std::size_t n = sizeof(T) * count;
+    if (n > bytes_.size() - pos_) throw InputError(fmt::format("{} is truncated or corrupt", name_));
+    std::memcpy(static_cast<void*>(data), bytes_.data() + pos_, n);
+    pos_ += n;
   }
   std::string ReadString() {
     const auto size = ReadCount(1 << 20);
@@ -106,18 +113,29 @@ class BinaryReader {
   std::uint32_t ReadCount(std::uint32_t max_count) {
     const auto n = Read<std::uint32_t>();
     if (n > max_count) {
-      throw InputError(fmt::format("{} is corrupt: count {} exceeds {}", path_.string(), n, max_count));
+      throw InputError(fmt::format("{} is corrupt: count {} exceeds {}", name_, n, max_count));
     }
     return n;
   }
 
  private:
-  [[noreturn]] void Truncated() const {
-    throw InputError(fmt::format("{} is truncated or corrupt", path_.string()));
+  void CheckHeader(std::string_view magic, std::uint32_t max_version) {
+    GLAM_CHECK(magic.size() == 8, "magic must be 8 bytes");
+    if (bytes_.size() < magic.size() || std::memcmp(bytes_.data(), magic.data(), magic.size()) != 0) {
+      throw InputError(fmt::format("{} is not a {} file", name_, magic));
+    }
+    pos_ = magic.size();
+    version_ = Read<std::uint32_t>();
+    if (version_ == 0 || version_ > max_version) {
+      throw InputError(fmt::format("{} has format version {}, this build reads versions 1..{}", name_,
+                                   version_, max_version));
+    }
   }
 
-  std::filesystem::path path_;
-  std::ifstream in_;
+  std::vector<std::uint8_t> owned_;  // file contents (empty for the span constructor)
+  std::span<const std::uint8_t> bytes_;
+  std::string name_;
+  std::size_t pos_ = 0;
   std::uint32_t version_ = 0;
 };
 
