@@ -27,20 +27,6 @@ nlohmann::json MatrixRows(const Sim3& t) {
   return rows;
 }
 
-std::vector<LandmarkMatch> GraphMatches(const std::vector<LandmarkPair>& pairs) {
-  std::vector<LandmarkMatch> matches;
-  matches.reserve(pairs.size());
-  for (const LandmarkPair& p : pairs) {
-    LandmarkMatch m;
-    m.landmark_a = p.reference_landmark;
-    m.landmark_b = p.query_landmark;
-    m.point_in_a = p.point_in_reference;
-    m.point_in_b = p.point_in_query;
-    matches.push_back(m);
-  }
-  return matches;
-}
-
 }  // namespace
 
 void AlignerOptions::Check() const {
@@ -283,8 +269,7 @@ void SubmapAligner::AddToGraph(std::uint32_t id, const Sim3& world_from_submap) 
 }
 
 void SubmapAligner::AddEdgeToGraph(const VerifiedEdge& edge) {
-  const std::vector<LandmarkMatch> matches = GraphMatches(edge.pairs);
-  graph_.AddEdge(edge.edge.reference, edge.edge.query, matches);
+  graph_.AddEdge(edge.edge.reference, edge.edge.query, edge.pairs);
   edges_.push_back(edge.edge);
 }
 

@@ -110,7 +110,7 @@ class SubmapAligner {
   };
   struct VerifiedEdge {
     AlignmentEdge edge;
-    std::vector<LandmarkPair> pairs;
+    std::vector<LandmarkMatch> pairs;
   };
   struct PendingComponent {
     Sim3 world_from_component;  // display placement only

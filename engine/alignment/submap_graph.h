@@ -40,6 +40,7 @@
 
 #include <Eigen/Core>
 
+#include "engine/alignment/landmark_match.h"
 #include "engine/core/cancellation.h"
 #include "engine/core/sim3.h"
 
@@ -100,15 +101,6 @@ struct GraphSolveSummary {
   bool converged = false;  // Ceres reported CONVERGENCE
   bool usable = false;     // converged, or stopped at max_iterations with a finite cost
   GraphLinearSolver solver = GraphLinearSolver::kSparseSchur;
-};
-
-// One inlier correspondence of an edge: landmark_a of submap_a and landmark_b of submap_b
-// are the same ground point, given in their own submap frames.
-struct LandmarkMatch {
-  std::uint32_t landmark_a = 0;
-  std::uint32_t landmark_b = 0;
-  Eigen::Vector3d point_in_a{0, 0, 0};
-  Eigen::Vector3d point_in_b{0, 0, 0};
 };
 
 struct GraphLandmark {

@@ -17,6 +17,7 @@
 
 #include <Eigen/Core>
 
+#include "engine/alignment/landmark_match.h"
 #include "engine/core/sim3.h"
 #include "engine/map/submap.h"
 
@@ -36,21 +37,14 @@ struct VerificationOptions {
   void Check() const;  // throws InputError
 };
 
-// One inlier correspondence: the same ground point as a landmark of each submap.
-struct LandmarkPair {
-  std::uint32_t reference_landmark = 0;  // Landmark::id in the reference submap
-  std::uint32_t query_landmark = 0;      // Landmark::id in the query submap
-  Eigen::Vector3d point_in_reference{0, 0, 0};
-  Eigen::Vector3d point_in_query{0, 0, 0};
-};
-
 struct PairVerification {
   bool verified = false;
   Sim3 reference_from_query;  // identity when !verified
   int matches = 0;
   int inliers = 0;
   double inlier_rmse = 0;  // in the reference submap's units
-  std::vector<LandmarkPair> inlier_pairs;  // empty when !verified
+  // a = reference, b = query; empty when !verified.
+  std::vector<LandmarkMatch> inlier_pairs;
 };
 
 // Median over landmarks of the distance to the nearest keyframe centre; 1 if undefined.

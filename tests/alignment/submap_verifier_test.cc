@@ -139,9 +139,9 @@ TEST(SubmapVerifier, OnePercentNoiseAndHalfWrongMatchesWithinTenthDegreeAndTenth
     EXPECT_LT(angle_deg, 0.1) << "seed " << seed;
     // Inlier pairs name landmarks of the right submaps and carry their positions.
     ASSERT_EQ(result.inlier_pairs.size(), static_cast<std::size_t>(result.inliers));
-    for (const LandmarkPair& p : result.inlier_pairs) {
-      ASSERT_LT(p.query_landmark, pair.next.landmarks.size());
-      EXPECT_EQ(pair.next.landmarks[p.query_landmark].point_in_submap, p.point_in_query);
+    for (const LandmarkMatch& p : result.inlier_pairs) {
+      ASSERT_LT(p.landmark_b, pair.next.landmarks.size());
+      EXPECT_EQ(pair.next.landmarks[p.landmark_b].point_in_submap, p.point_in_b);
     }
   }
 }

@@ -1,0 +1,20 @@
+// One verified correspondence between two submaps: landmark_a of submap a and landmark_b of
+// submap b are the same ground point, each given in its own submap frame. Pair verification
+// (submap_verifier.h, a = the reference submap, b = the query) produces them and the submap
+// factor graph (submap_graph.h) consumes them, so both speak this one type.
+#pragma once
+
+#include <cstdint>
+
+#include <Eigen/Core>
+
+namespace glam {
+
+struct LandmarkMatch {
+  std::uint32_t landmark_a = 0;  // Landmark::id in submap a
+  std::uint32_t landmark_b = 0;  // Landmark::id in submap b
+  Eigen::Vector3d point_in_a{0, 0, 0};
+  Eigen::Vector3d point_in_b{0, 0, 0};
+};
+
+}  // namespace glam
