@@ -34,6 +34,11 @@ std::string TilesetFileName(TileVariant variant) {
   return variant == TileVariant::kDraco ? "tileset.json" : "tileset.quantized.json";
 }
 
+std::string TileUri(std::uint32_t submap_id, TileVariant variant, const std::string& run_id) {
+  const std::string file = TileFileName(submap_id, variant);
+  return run_id.empty() ? file : file + "?v=" + run_id;
+}
+
 json ColumnMajor(const Eigen::Matrix4d& m) {
   json out = json::array();
   for (int col = 0; col < 4; ++col) {
@@ -43,7 +48,7 @@ json ColumnMajor(const Eigen::Matrix4d& m) {
 }
 
 json BuildTileset(const MapSnapshot& snapshot, const std::map<std::uint32_t, Eigen::AlignedBox3d>& bounds,
-                  TileVariant variant) {
+                  TileVariant variant, const std::string& run_id) {
   json children = json::array();
   Eigen::AlignedBox3d world;  // root box: the children's boxes after their transforms
   for (const SubmapPlacement& placement : snapshot.submaps) {
@@ -60,7 +65,7 @@ json BuildTileset(const MapSnapshot& snapshot, const std::map<std::uint32_t, Eig
     child["geometricError"] = 0.0;
     child["refine"] = "ADD";
     child["transform"] = ColumnMajor(placement.world_from_submap.matrix());
-    child["content"] = {{"uri", TileFileName(placement.id, variant)}};
+    child["content"] = {{"uri", TileUri(placement.id, variant, run_id)}};
     child["extras"] = {{"submap", placement.id},
                        {"disconnected", placement.disconnected},
                        {"first_frame", placement.first_frame},

@@ -10,7 +10,10 @@
 // last_frame}. asset.tilesetVersion is the revision as a string and extras.revision the number.
 //
 // Because tiles never change after their submap completes, a new alignment result rewrites
-// this small file only. Submaps without a tile box (empty submaps) are left out of the
+// this small file only. Tiles are therefore served as immutable; but a job mapped again from
+// the start (restart, another engine version) writes new tiles under the same file names, so
+// content URIs carry the run's id as a query (`tiles/3.glb?v=<run_id>`): a client that cached
+// an earlier run's tile asks for a new URL instead of reusing stale bytes. Submaps without a tile box (empty submaps) are left out of the
 // children; the root then still exists (3D Tiles needs one) with a tiny box at the origin
 // when there is no child at all.
 #pragma once
@@ -40,9 +43,14 @@ std::string TilesetFileName(TileVariant variant);
 // 16 numbers, column-major, of world_from_submap.matrix().
 nlohmann::json ColumnMajor(const Eigen::Matrix4d& m);
 
+// The content URI of a tile in tileset.json: TileFileName, plus `?v=<run_id>` when run_id is
+// not empty.
+std::string TileUri(std::uint32_t submap_id, TileVariant variant, const std::string& run_id);
+
 // `bounds`: submap id -> axis-aligned box of its tile in the submap frame (TileBounds).
+// `run_id`: identifies the run that wrote the tiles (see above); may be empty.
 nlohmann::json BuildTileset(const MapSnapshot& snapshot,
                             const std::map<std::uint32_t, Eigen::AlignedBox3d>& bounds,
-                            TileVariant variant);
+                            TileVariant variant, const std::string& run_id = "");
 
 }  // namespace glam

@@ -6,6 +6,8 @@
 #include <fstream>
 #include <memory>
 #include <optional>
+#include <random>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -93,10 +95,17 @@ std::optional<ResumeCheckpoint> UsableCheckpoint(const std::filesystem::path& ou
   return checkpoint;
 }
 
+// 64 random bits as 16 hex digits: tells this run's tiles from an earlier run's.
+std::string NewRunId() {
+  std::random_device device;
+  const std::uint64_t bits = (static_cast<std::uint64_t>(device()) << 32) ^ device();
+  return fmt::format("{:016x}", bits);
+}
+
 // After `completed[i]` is on disk: the next submap starts at completed[i + 1]'s first frame,
 // or where the builder's open submap starts.
 ResumeCheckpoint MakeCheckpoint(const SubmapBuilder& builder, const std::vector<Submap>& completed,
-                                std::size_t i, const MappingReport& report) {
+                                std::size_t i, const MappingReport& report, const std::string& run_id) {
   ResumeCheckpoint c;
   c.next_submap_id = completed[i].id + 1;
   c.resume_frame = i + 1 < completed.size()
@@ -106,6 +115,7 @@ ResumeCheckpoint MakeCheckpoint(const SubmapBuilder& builder, const std::vector<
   c.input = report.input;
   c.processing_width = report.processing_width;
   c.processing_height = report.processing_height;
+  c.run_id = run_id;
   return c;
 }
 
@@ -148,7 +158,8 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
     ClearPreviousRun(out_dir);
   }
   // Map tiles for the viewer (written once per submap) and tileset.json (per revision).
-  TileWriter tiles(out_dir);
+  const std::string run_id = resume && !resume->run_id.empty() ? resume->run_id : NewRunId();
+  TileWriter tiles(out_dir, run_id);
   GLAM_LOG_INFO("mapping {}: {}x{} -> {}x{}, {:.3g} fps, ~{} frames, initial focal {:.1f} px",
                 report.input, info.original_size.width, info.original_size.height,
                 info.processing_size.width, info.processing_size.height, report.fps,
@@ -205,7 +216,7 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
       const auto write_start = Clock::now();
       WriteSubmap(submap, submaps_root);
       tiles.OnSubmapCompleted(submap);
-      WriteCheckpoint(out_dir, MakeCheckpoint(builder, completed, i, report));
+      WriteCheckpoint(out_dir, MakeCheckpoint(builder, completed, i, report, run_id));
       writing += Seconds(write_start);
       GLAM_LOG_INFO("submap {} completed: frames {}-{}, {} keyframes, {} landmarks", submap.id,
                     submap.first_frame, submap.last_frame, submap.keyframes.size(),

@@ -16,7 +16,8 @@ void WriteCheckpoint(const std::filesystem::path& out_dir, const ResumeCheckpoin
                                {"resume_frame", c.resume_frame},
                                {"focal_px", c.focal},
                                {"input", c.input},
-                               {"processing_size", {c.processing_width, c.processing_height}}};
+                               {"processing_size", {c.processing_width, c.processing_height}},
+                               {"run_id", c.run_id}};
   WriteFileAtomically(out_dir / kCheckpointFile, json.dump(2) + "\n");
 }
 
@@ -33,6 +34,7 @@ std::optional<ResumeCheckpoint> ReadCheckpoint(const std::filesystem::path& out_
     c.input = json.at("input").get<std::string>();
     c.processing_width = json.at("processing_size").at(0).get<int>();
     c.processing_height = json.at("processing_size").at(1).get<int>();
+    c.run_id = json.value("run_id", std::string());
     if (c.resume_frame < 0 || !(c.focal > 0)) throw InputError("values out of range");
     return c;
   } catch (const std::exception& e) {

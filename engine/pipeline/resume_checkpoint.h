@@ -21,6 +21,9 @@ struct ResumeCheckpoint {
   std::string input;
   int processing_width = 0;
   int processing_height = 0;
+  // The run's id (tile URIs carry it; see BuildTileset): a resumed run keeps it. Empty in
+  // checkpoints written before it existed.
+  std::string run_id;
 };
 
 inline constexpr char kCheckpointFile[] = "checkpoint.json";

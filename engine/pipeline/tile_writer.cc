@@ -41,8 +41,8 @@ TileGeometry SubmapTileGeometry(const Submap& submap) {
   return geometry;
 }
 
-TileWriter::TileWriter(std::filesystem::path out_dir, DracoTileOptions draco)
-    : out_dir_(std::move(out_dir)), draco_(draco) {
+TileWriter::TileWriter(std::filesystem::path out_dir, std::string run_id, DracoTileOptions draco)
+    : out_dir_(std::move(out_dir)), run_id_(std::move(run_id)), draco_(draco) {
   draco_.Check();
   std::error_code ec;
   std::filesystem::create_directories(out_dir_ / "tiles", ec);
@@ -84,7 +84,7 @@ void TileWriter::OnRevision(const MapSnapshot& snapshot) {
     }
   }
   for (const TileVariant variant : {TileVariant::kDraco, TileVariant::kQuantized}) {
-    WriteFileAtomically(out_dir_ / TilesetFileName(variant), BuildTileset(snapshot, bounds_, variant).dump(1));
+    WriteFileAtomically(out_dir_ / TilesetFileName(variant), BuildTileset(snapshot, bounds_, variant, run_id_).dump(1));
   }
   last_revision_ = snapshot.revision;
 }

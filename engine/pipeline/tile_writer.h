@@ -35,7 +35,9 @@ TileGeometry SubmapTileGeometry(const Submap& submap);
 
 class TileWriter {
  public:
-  explicit TileWriter(std::filesystem::path out_dir, DracoTileOptions draco = {});
+  // run_id: versions the tile URIs in tileset.json (BuildTileset); a resumed run keeps the
+  // interrupted run's id because it keeps that run's tiles.
+  TileWriter(std::filesystem::path out_dir, std::string run_id, DracoTileOptions draco = {});
 
   // Writes tiles/<id>.glb and tiles/<id>.quantized.glb. An empty submap (no landmarks) gets
   // valid tiles without points; it has no child in the tileset.
@@ -57,6 +59,7 @@ class TileWriter {
   void WriteTiles(const Submap& submap, bool only_missing);
 
   std::filesystem::path out_dir_;
+  std::string run_id_;
   DracoTileOptions draco_;
   mutable std::mutex mutex_;
   std::map<std::uint32_t, Eigen::AlignedBox3d> bounds_;  // submap id -> tile bounds

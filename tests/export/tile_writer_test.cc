@@ -80,7 +80,9 @@ void ExpectTilePlacedInWorld(const fs::path& dir, const json& tileset, const Sub
   ASSERT_NE(child, nullptr);
   const Eigen::Matrix4d transform = FromColumnMajor((*child)["transform"]);
   const std::string uri = (*child)["content"]["uri"];
-  const tinygltf::Model model = glam::testing::ParseGlb(glam::testing::ReadBytes(dir / uri));
+  ASSERT_EQ(uri.substr(uri.find('?')), "?v=run1");
+  const std::string file = uri.substr(0, uri.find('?'));
+  const tinygltf::Model model = glam::testing::ParseGlb(glam::testing::ReadBytes(dir / file));
   const bool quantized = uri.find(".quantized.") != std::string::npos;
   const std::vector<ColoredPoint> points =
       quantized ? glam::testing::DequantizePoints(model) : glam::testing::DecodeDracoPoints(model);
@@ -97,7 +99,7 @@ void ExpectTilePlacedInWorld(const fs::path& dir, const json& tileset, const Sub
 
 TEST(TileWriter, TilesOnceTilesetPerRevisionPointsLandInTheWorld) {
   const fs::path dir = glam::testing::FreshTempDir("tile_writer");
-  TileWriter writer(dir);
+  TileWriter writer(dir, "run1");
   const std::vector<Submap> submaps = {MakeSubmap(0, 800, 1), MakeSubmap(1, 600, 2)};
   writer.OnSubmapCompleted(submaps[0]);
   writer.OnSubmapCompleted(submaps[1]);
@@ -154,12 +156,12 @@ TEST(TileWriter, ResumedWriterRecoversEarlierSubmapsFromDisk) {
   const std::vector<Submap> submaps = {MakeSubmap(0, 300, 5), MakeSubmap(1, 300, 6), MakeSubmap(2, 300, 7)};
   for (const Submap& s : submaps) WriteSubmap(s, dir / "submaps");
   {
-    TileWriter first(dir);
+    TileWriter first(dir, "run1");
     first.OnSubmapCompleted(submaps[0]);
   }
   const std::string tile0 = glam::testing::ReadBytes(dir / "tiles/0.glb");
   const auto tile0_time = fs::last_write_time(dir / "tiles/0.glb");
-  TileWriter resumed(dir);  // knows nothing about submaps 0 and 1
+  TileWriter resumed(dir, "run1");  // knows nothing about submaps 0 and 1
   resumed.OnSubmapCompleted(submaps[2]);
   MapSnapshot snapshot;
   snapshot.revision = 5;
@@ -184,7 +186,7 @@ TEST(TileWriter, MapGlbHoldsTheConnectedSubmapsInWorldFrame) {
   snapshot.revision = 3;
   snapshot.submaps = {Place(0, 1, 0, Eigen::Vector3d::Zero()), Place(1, 1.3, 0.5, Eigen::Vector3d(25, 3, 0)),
                       Place(2, 1, 0, Eigen::Vector3d(90, 0, 0), /*disconnected=*/true)};
-  TileWriter writer(dir);
+  TileWriter writer(dir, "run1");
   EXPECT_EQ(writer.WriteMapGlb(snapshot, dir / "submaps"), 700);
   const tinygltf::Model model = glam::testing::ParseGlb(glam::testing::ReadBytes(dir / "map.glb"));
   const std::vector<ColoredPoint> points = glam::testing::DecodeDracoPoints(model);
@@ -212,7 +214,7 @@ TEST(TileWriter, MapGlbHoldsTheConnectedSubmapsInWorldFrame) {
 
 TEST(TileWriter, EmptySubmapGetsValidTilesButNoTilesetChild) {
   const fs::path dir = glam::testing::FreshTempDir("tile_writer_empty");
-  TileWriter writer(dir);
+  TileWriter writer(dir, "run1");
   writer.OnSubmapCompleted(MakeSubmap(0, 100, 1));
   writer.OnSubmapCompleted(MakeSubmap(1, 0, 2));
   const tinygltf::Model empty = glam::testing::ParseGlb(glam::testing::ReadBytes(dir / "tiles/1.glb"));
@@ -233,7 +235,7 @@ TEST(TileWriter, EmptySubmapGetsValidTilesButNoTilesetChild) {
 
 TEST(TileWriter, ReadersNeverSeeAHalfWrittenTileset) {
   const fs::path dir = glam::testing::FreshTempDir("tile_writer_atomic");
-  TileWriter writer(dir);
+  TileWriter writer(dir, "run1");
   MapSnapshot snapshot;
   for (std::uint32_t id = 0; id < 40; ++id) {
     writer.OnSubmapCompleted(MakeSubmap(id, 20, id));

@@ -100,6 +100,9 @@ TEST(Tileset, CarriesTheRevisionAndOneChildPerSubmap) {
   const json quantized = BuildTileset(f.snapshot, f.bounds, TileVariant::kQuantized);
   EXPECT_EQ(quantized["root"]["children"][3]["content"]["uri"], "tiles/3.quantized.glb");
   EXPECT_EQ(TilesetFileName(TileVariant::kQuantized), "tileset.quantized.json");
+  // With a run id, every content URI carries it as a query (cache key of the immutable tiles).
+  const json versioned = BuildTileset(f.snapshot, f.bounds, TileVariant::kQuantized, "0123abcd");
+  EXPECT_EQ(versioned["root"]["children"][1]["content"]["uri"], "tiles/1.quantized.glb?v=0123abcd");
 }
 
 TEST(Tileset, TransformsAreTheSnapshotSim3sAndPlaceTilePointsInTheWorld) {

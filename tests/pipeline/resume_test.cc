@@ -3,9 +3,11 @@
 // not rewritten), re-aligns them, and ends with a map as accurate as an uninterrupted run.
 #include <algorithm>
 #include <filesystem>
+#include <fstream>
 #include <limits>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "engine/core/error.h"
 #include "engine/core/intrinsics_io.h"
@@ -20,6 +22,14 @@ namespace {
 namespace fs = std::filesystem;
 
 const fs::path kClip = fs::path(GLAM_TEST_FIXTURES_DIR) / "lawnmower_small";
+
+// The content URI of the first child of out/tileset.json.
+std::string TilesetContentUri(const fs::path& out) {
+  const nlohmann::json tileset = nlohmann::json::parse(std::ifstream(out / "tileset.json"));
+  const std::string uri = tileset.at("root").at("children").at(0).at("content").at("uri");
+  EXPECT_NE(uri.find("?v="), std::string::npos) << uri;
+  return uri;
+}
 
 MappingOptions DemoOptions() {
   MappingOptions options;
@@ -45,6 +55,7 @@ TEST(ResumeMapping, InterruptedRunContinuesFromItsCheckpointAndIsAccurate) {
   ASSERT_TRUE(checkpoint.has_value());
   EXPECT_GE(checkpoint->next_submap_id, 2u);
   EXPECT_GT(checkpoint->resume_frame, 0);
+  EXPECT_EQ(checkpoint->run_id.size(), 16u);
   const fs::file_time_type first_written =
       fs::last_write_time(SubmapDirectory(out / "submaps", 0) / "submap.bin");
   const Submap last_before = ReadSubmap(out / "submaps", checkpoint->next_submap_id - 1);
@@ -66,12 +77,18 @@ TEST(ResumeMapping, InterruptedRunContinuesFromItsCheckpointAndIsAccurate) {
   EXPECT_GT(report.submaps, static_cast<std::int64_t>(checkpoint->next_submap_id));
   EXPECT_EQ(report.disconnected_submaps, 0);
   EXPECT_EQ(fs::last_write_time(SubmapDirectory(out / "submaps", 0) / "submap.bin"), first_written);
+  // The resumed run keeps the interrupted run's tiles, so its tile URIs keep that run's id.
+  const std::string resumed_uri = TilesetContentUri(out);
+  EXPECT_EQ(resumed_uri.substr(resumed_uri.find('?')), "?v=" + checkpoint->run_id);
 
   // As accurate as the same run without the interruption (the resumed submap restarts where
   // the uninterrupted one would have started it, so the two should agree closely).
   const fs::path full = fs::temp_directory_path() / "glam_resume_test_full";
   fs::remove_all(full);
   RunMapping(kClip / "video.mp4", full, DemoOptions());
+  // A run from the start writes new tiles: new URIs, so cached tiles of another run are not reused.
+  const std::string fresh_uri = TilesetContentUri(full);
+  EXPECT_NE(fresh_uri.substr(fresh_uri.find('?')), "?v=" + checkpoint->run_id);
   const eval::EvaluationResult resumed = eval::EvaluateDirectories(kClip, out, {});
   const eval::EvaluationResult uninterrupted = eval::EvaluateDirectories(kClip, full, {});
   EXPECT_GE(resumed.trajectory.fraction_posed, uninterrupted.trajectory.fraction_posed - 0.01);

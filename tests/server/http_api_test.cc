@@ -228,7 +228,7 @@ TEST_F(HttpApiTest, MapTilesTilesetAndFormatsAreServed) {
     submap.landmarks.push_back(lm);
   }
   WriteSubmap(submap, job_dir / "submaps");
-  TileWriter tiles(job_dir);
+  TileWriter tiles(job_dir, "r1");
   tiles.OnSubmapCompleted(submap);
   MapSnapshot snapshot;
   snapshot.revision = 1;
@@ -265,7 +265,7 @@ TEST_F(HttpApiTest, MapTilesTilesetAndFormatsAreServed) {
   ASSERT_FALSE(etag.empty());
   json tileset = json::parse(res->body);
   EXPECT_EQ(tileset["extras"]["revision"], 1);
-  EXPECT_EQ(tileset["root"]["children"][0]["content"]["uri"], "tiles/0.glb");
+  EXPECT_EQ(tileset["root"]["children"][0]["content"]["uri"], "tiles/0.glb?v=r1");
   res = client.Get(base + "tileset.json", {{"If-None-Match", etag}});
   ASSERT_TRUE(res);
   EXPECT_EQ(res->status, 304);
