@@ -4,6 +4,9 @@
 # it on every `make run` / `make test` costs a dpkg query, not an apt transaction.
 # The list below is the single source of truth; docker/Dockerfile must install the same
 # (tests/tools/check_docker_packages.sh compares them).
+#   setup-deps.sh              runtime + build packages (make run, docker/Dockerfile)
+#   setup-deps.sh --with-test  also TEST_PACKAGES, needed only by the test suite (make test)
+#   setup-deps.sh --print      the runtime + build list (what the Docker image gets)
 set -euo pipefail
 
 PACKAGES=(
@@ -16,10 +19,17 @@ PACKAGES=(
   curl jq
 )
 
-if [[ "${1:-}" == "--print" ]]; then
-  printf '%s\n' "${PACKAGES[@]}"
-  exit 0
-fi
+# Only for tests, never in the image: the browser test (tests/web) drives Debian's chromium.
+TEST_PACKAGES=(
+  chromium
+)
+
+case "${1:-}" in
+  --print) printf '%s\n' "${PACKAGES[@]}"; exit 0 ;;
+  --with-test) PACKAGES+=("${TEST_PACKAGES[@]}") ;;
+  "") ;;
+  *) echo "usage: $0 [--with-test | --print]" >&2; exit 2 ;;
+esac
 
 missing=()
 for p in "${PACKAGES[@]}"; do

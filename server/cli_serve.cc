@@ -8,6 +8,7 @@
 
 #include <atomic>
 #include <cstdlib>
+#include <filesystem>
 #include <ctime>
 #include <iostream>
 #include <memory>
@@ -34,13 +35,30 @@ struct ServeArgs {
   server::HttpServerOptions http;
 };
 
+// The viewer's directory when --web-root is not given: env GLAM_WEB_ROOT, then the build
+// tree's web/dist (compiled in, so a developer's `glam serve` shows the viewer they just
+// built), then the install layout <prefix>/share/glam/web next to <prefix>/bin/glam. Empty:
+// the server falls back to its built-in job list page.
 std::string DefaultWebRoot() {
+  namespace fs = std::filesystem;
   if (const char* env = std::getenv("GLAM_WEB_ROOT")) return env;
+  auto has_index = [](const fs::path& dir) {
+    std::error_code ec;
+    return fs::is_regular_file(dir / "index.html", ec);
+  };
 #ifdef GLAM_DEFAULT_WEB_ROOT
-  return GLAM_DEFAULT_WEB_ROOT;
-#else
-  return "";
+  if (has_index(GLAM_DEFAULT_WEB_ROOT)) return GLAM_DEFAULT_WEB_ROOT;
 #endif
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  if (!ec) {
+    const fs::path installed = exe.parent_path().parent_path() / "share" / "glam" / "web";
+    if (has_index(installed)) return installed.string();
+  }
+  GLAM_LOG_WARN("no web viewer found (--web-root, GLAM_WEB_ROOT, the build's web/dist or "
+                "<prefix>/share/glam/web); serving the built-in job list at /. "
+                "Build the viewer with: bash scripts/setup-node.sh");
+  return "";
 }
 
 void RunServe(ServeArgs& args) {
@@ -125,7 +143,8 @@ void RegisterServeCommand(CLI::App& app) {
   cmd->add_option("--cors-origin", args->http.cors_origin,
                   "Allowed browser origin for cross-origin requests (default: none)");
   cmd->add_option("--web-root", args->web_root,
-                  "Directory of the web viewer (default: env GLAM_WEB_ROOT or the built-in page)");
+                  "Directory of the web viewer (default: env GLAM_WEB_ROOT, the build's web/dist, "
+                  "<prefix>/share/glam/web, else a built-in job list page)");
   cmd->callback([args] { RunServe(*args); });
 }
 

@@ -8,7 +8,7 @@ const std::string& BuiltInIndexHtml() {
 <style>body{font-family:sans-serif;margin:2em}table{border-collapse:collapse}
 td,th{border:1px solid #ccc;padding:4px 8px}</style></head>
 <body><h1>GLAM server</h1>
-<p>The 3D viewer is not installed; this page lists jobs. API: <a href="/api/v1/openapi.yaml">openapi.yaml</a></p>
+<p>The 3D viewer is not installed (build it with <code>bash scripts/setup-node.sh</code>, see docs/viewer.md); this page lists jobs. API: <a href="/api/v1/openapi.yaml">openapi.yaml</a></p>
 <form id="up"><input type="file" name="video" accept="video/*"> <button>Upload</button></form>
 <table><thead><tr><th>name</th><th>state</th><th>frames</th><th>submaps</th><th>results</th></tr></thead>
 <tbody id="jobs"></tbody></table>

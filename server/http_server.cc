@@ -299,11 +299,18 @@ HttpServer::HttpServer(api::JobService& service, HttpServerOptions options)
     }
   }
 
+  // Static viewer (web/dist). Its file names are not content-hashed, so the browser must
+  // revalidate them (cpp-httplib answers with the whole file; they are small). .wasm is mapped
+  // explicitly: DRACOLoader's WebAssembly decoder needs application/wasm.
   const fs::path& web = ctx->options.web_root;
   if (!web.empty() && fs::is_regular_file(web / "index.html")) {
-    server_->set_mount_point("/", web.string());
+    server_->set_file_extension_and_mimetype_mapping("wasm", "application/wasm");
+    server_->set_file_extension_and_mimetype_mapping("mjs", "text/javascript");
+    server_->set_file_extension_and_mimetype_mapping("map", "application/json");
+    server_->set_mount_point("/", web.string(), {{"Cache-Control", "no-cache"}});
     GLAM_LOG_INFO("serving the viewer from {}", web.string());
   } else {
+    if (!web.empty()) GLAM_LOG_WARN("{} has no index.html; serving the built-in job list at /", web.string());
     server_->Get("/", [](const Request&, Response& res) { res.set_content(BuiltInIndexHtml(), "text/html; charset=utf-8"); });
   }
 

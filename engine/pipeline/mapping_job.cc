@@ -204,7 +204,9 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
                       : -1;
     state.submaps_completed = submaps_completed;
     state.submaps_aligned = alignment.submaps_aligned();
-    state.revision = alignment.revision();
+    // The revision whose tileset.json is on disk, not thread 2's latest: a client told about
+    // a revision must be able to fetch its tileset.
+    state.revision = std::max<std::int64_t>(0, tiles.last_revision_written());
     state.keyframes = builder.stats().keyframes;
     state.points = alignment.points();
     progress(state);
@@ -234,7 +236,7 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
       cancel.ThrowIfCancelled();
       alignment.RethrowIfFailed();
       std::optional<FrameFeatures> item = queue.PopFor(std::chrono::milliseconds(100));
-      if (state.revision != alignment.revision()) {  // a new map revision
+      if (alignment.revision() > std::max<std::int64_t>(0, tiles.last_revision_written())) {  // a new map revision
         tiles.OnRevision(*aligner.snapshot());
         emit(true);
       }

@@ -1,0 +1,311 @@
+// Browser test of the web viewer (issue 7): headless Debian chromium driven by playwright-core.
+//
+//   node browser_test.mjs --glam GLAM_BIN --clip VIDEO --source-dir SRC --out DIR
+//
+// Starts `glam serve` (temporary data dir, free port, API token) with its default web root
+// (the build's web/dist), uploads VIDEO through the page's file input, waits until the job is
+// complete and the viewer has decoded every tile, then checks against the server:
+//   * points decoded in the page (connected submaps) == the job's progress.points and
+//     report.json points; one decoded tile per tileset child, each fetched exactly once;
+//   * every tile sits at the final tileset's transform, its decoded points inside its bounding
+//     volume in the world frame (axis convention); tiles whose transform changed during the
+//     run were moved by the SSE `revision` path without being fetched again; every revision
+//     event's tileset.json already had that revision; a further (injected) revision moves
+//     every tile without reloading it;
+//   * the canvas is not blank (non-background pixels); the screenshot is saved in DIR;
+//   * a second, standard client (3DTilesRendererJS) loads `tileset.json?format=quantized`:
+//     every child tile, with the same number of points.
+// Prints the time from each submap's `submap` event to its tile being visible (benchmark).
+// Exits 0 on success, 1 on a failed check (chromium missing is a failure, not a skip).
+import { spawn } from 'node:child_process';
+import { existsSync, mkdirSync, mkdtempSync, rmSync, writeFileSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { dirname, join, resolve } from 'node:path';
+import { createInterface } from 'node:readline';
+import { fileURLToPath } from 'node:url';
+
+const here = dirname(fileURLToPath(import.meta.url));
+const TOKEN = 'browser-test-token';
+const CHROMIUM = process.env.GLAM_CHROMIUM || '/usr/bin/chromium';
+const JOB_TIMEOUT_MS = 180_000;
+const KEYFRAMES_PER_SUBMAP = 4;
+
+function args() {
+  const out = {};
+  const a = process.argv.slice(2);
+  for (let i = 0; i < a.length; i += 2) out[a[i].replace(/^--/, '')] = a[i + 1];
+  for (const k of ['glam', 'clip', 'source-dir', 'out']) {
+    if (!out[k]) throw new Error(`missing --${k}`);
+  }
+  return out;
+}
+
+let failures = 0;
+function check(ok, message) {
+  console.log(`${ok ? 'ok  ' : 'FAIL'} ${message}`);
+  if (!ok) failures += 1;
+}
+
+function startServer(glam, dataDir) {
+  const env = { ...process.env };
+  delete env.GLAM_WEB_ROOT;  // exercise the compiled-in default web root (the build's web/dist)
+  delete env.GLAM_API_TOKEN;
+  const child = spawn(glam, ['--log-level', 'warn', 'serve', '--data', dataDir, '--port', '0', '--token', TOKEN],
+    { env, stdio: ['ignore', 'pipe', 'inherit'] });
+  return new Promise((resolvePort, reject) => {
+    const timer = setTimeout(() => reject(new Error('glam serve did not report its port within 30 s')), 30_000);
+    child.once('exit', (code) => reject(new Error(`glam serve exited with ${code}`)));
+    createInterface({ input: child.stdout }).on('line', (line) => {
+      try {
+        const j = JSON.parse(line);
+        if (j.port) {
+          clearTimeout(timer);
+          resolvePort({ child, port: j.port });
+        }
+      } catch {
+        // not the JSON line
+      }
+    });
+  });
+}
+
+async function api(base, path) {
+  const r = await fetch(`${base}/api/v1/${path}`, { headers: { Authorization: `Bearer ${TOKEN}` } });
+  if (!r.ok) throw new Error(`GET ${path}: HTTP ${r.status}`);
+  return r.json();
+}
+
+// Share of canvas pixels that differ from the clear colour, computed in the page.
+function nonBackgroundShare(page) {
+  return page.evaluate(() => {
+    const src = document.querySelector('#canvas-host canvas');
+    const c = document.createElement('canvas');
+    c.width = src.width;
+    c.height = src.height;
+    const ctx = c.getContext('2d');
+    ctx.drawImage(src, 0, 0);
+    const { data } = ctx.getImageData(0, 0, c.width, c.height);
+    let n = 0;
+    for (let i = 0; i < data.length; i += 4) {
+      if (Math.abs(data[i] - 0x10) + Math.abs(data[i + 1] - 0x14) + Math.abs(data[i + 2] - 0x18) > 24) n += 1;
+    }
+    return n / (data.length / 4);
+  });
+}
+
+// World-frame axis-aligned box of a tileset child's boundingVolume.box under its transform
+// (column-major 4x4).
+function worldBoxOfChild(child) {
+  const b = child.boundingVolume.box;
+  const m = child.transform;
+  const lo = [Infinity, Infinity, Infinity];
+  const hi = [-Infinity, -Infinity, -Infinity];
+  for (const sx of [-1, 1]) for (const sy of [-1, 1]) for (const sz of [-1, 1]) {
+    const p = [0, 1, 2].map((k) => b[k] + sx * b[3 + k] + sy * b[6 + k] + sz * b[9 + k]);
+    const w = [0, 1, 2].map((r) => m[r] * p[0] + m[4 + r] * p[1] + m[8 + r] * p[2] + m[12 + r]);
+    for (let k = 0; k < 3; k += 1) {
+      lo[k] = Math.min(lo[k], w[k]);
+      hi[k] = Math.max(hi[k], w[k]);
+    }
+  }
+  return [lo, hi];
+}
+
+function stats(values) {
+  const v = [...values].sort((a, b) => a - b);
+  if (v.length === 0) return 'none';
+  const q = (p) => v[Math.min(v.length - 1, Math.floor(p * v.length))];
+  return `n=${v.length} min=${v[0].toFixed(0)} median=${q(0.5).toFixed(0)} max=${v[v.length - 1].toFixed(0)} ms`;
+}
+
+async function main() {
+  const opt = args();
+  if (!existsSync(CHROMIUM)) {
+    throw new Error(`${CHROMIUM} not found: the browser test needs Debian's chromium ` +
+      '(`bash scripts/setup-deps.sh --with-test`, which `make test` runs)');
+  }
+  const dist = join(opt['source-dir'], 'web/dist/index.html');
+  if (!existsSync(dist)) throw new Error(`${dist} missing: build the viewer (bash scripts/setup-node.sh)`);
+  if (!existsSync(opt.clip)) throw new Error(`clip ${opt.clip} missing (CTest fixture fixture.synth_web)`);
+  mkdirSync(opt.out, { recursive: true });
+  let build;
+  let chromium;
+  try {
+    ({ build } = await import('esbuild'));
+    ({ chromium } = await import('playwright-core'));
+    await import('3d-tiles-renderer');
+  } catch (err) {
+    throw new Error(`${err.message}: install the test's npm packages with bash scripts/setup-node.sh`);
+  }
+
+  // The second client's page: 3DTilesRendererJS bundled for the browser.
+  const bundle = await build({
+    entryPoints: [join(here, 'tiles_client.js')], bundle: true, format: 'iife', write: false,
+    logLevel: 'warning', nodePaths: [join(here, 'node_modules')],
+  });
+
+  const dataDir = mkdtempSync(join(tmpdir(), 'glam-browser-test-'));
+  const { child, port } = await startServer(resolve(opt.glam), dataDir);
+  const base = `http://127.0.0.1:${port}`;
+  const browser = await chromium.launch({
+    executablePath: CHROMIUM,
+    args: ['--no-sandbox', '--enable-unsafe-swiftshader', '--use-angle=swiftshader'],
+  });
+  try {
+    const page = await browser.newPage({ viewport: { width: 1280, height: 720 } });
+    page.on('pageerror', (e) => console.log(`page error: ${e.message}`));
+    page.on('console', (m) => { if (m.type() === 'error') console.log(`page console: ${m.text()}`); });
+
+    // 1. Upload through the page (the token arrives as ?token= and is kept by the page).
+    await page.goto(`${base}/?token=${TOKEN}`);
+    await page.setInputFiles('#video-file', opt.clip);
+    // Short submaps, so that the small clip gives several submaps and map revisions.
+    await page.click('#upload-form summary');
+    await page.fill('#upload-form input[name=keyframes_per_submap]', String(KEYFRAMES_PER_SUBMAP));
+    const t0 = Date.now();
+    await page.click('#upload-form button[type=submit]');
+    await page.waitForURL(/[?&]job=[0-9a-f]{16}/, { timeout: 60_000 });
+    const jobId = new URL(page.url()).searchParams.get('job');
+    console.log(`job ${jobId} created through the page; following it in the map view`);
+
+    // 2. Wait for the job and the viewer.
+    await page.waitForFunction(() => window.glamViewer && window.glamViewer.complete, null,
+      { timeout: JOB_TIMEOUT_MS, polling: 500 });
+    console.log(`job finished and all tiles decoded after ${((Date.now() - t0) / 1000).toFixed(1)} s`);
+    const viewer = await page.evaluate(() => {
+      const v = window.glamViewer;
+      return { ...v, matrices: v.tileMatrices(), pointBoxes: v.tilePointBoxes() };
+    });
+    const job = await api(base, `jobs/${jobId}`);
+    const report = await api(base, `jobs/${jobId}/report.json`);
+    const tileset = await api(base, `jobs/${jobId}/tileset.json`);
+    const children = tileset.root.children || [];
+    check(job.state === 'completed', `job state ${job.state}`);
+    check(viewer.errors.length === 0, `viewer errors: ${JSON.stringify(viewer.errors)}`);
+    check(children.length >= 2, `tileset has ${children.length} child tiles (several submaps expected)`);
+    check(viewer.tilesLoaded === children.length, `viewer decoded ${viewer.tilesLoaded} tiles of ${children.length}`);
+    check(viewer.pointsConnected === job.progress.points && viewer.pointsConnected > 0,
+      `points decoded in the page (connected submaps) ${viewer.pointsConnected} == job progress.points ${job.progress.points}`);
+    check(report.points === job.progress.points, `report.json points ${report.points} == progress.points ${job.progress.points}`);
+    check(viewer.revision === tileset.extras.revision, `viewer revision ${viewer.revision} == tileset revision ${tileset.extras.revision}`);
+    const fetches = Object.values(viewer.tileFetches);
+    check(fetches.length === children.length && fetches.every((n) => n === 1),
+      `each tile fetched exactly once: ${JSON.stringify(viewer.tileFetches)}`);
+
+    // 3. Tiles at the final transforms; moved on revision without reloading points.
+    let placed = true;
+    let moved = 0;
+    for (const c of children) {
+      const m = viewer.matrices[c.extras.submap];
+      if (!m) { placed = false; continue; }
+      if (m.current.some((x, i) => Math.abs(x - c.transform[i]) > 1e-9 * (1 + Math.abs(x)))) placed = false;
+      if (m.first.some((x, i) => x !== m.current[i])) moved += 1;
+    }
+    check(placed, 'every tile sits at its transform of the final tileset');
+    // Axis convention: the decoded points, rotated from glTF y-up and placed by the transform,
+    // must fall inside the child's bounding volume (a box in the submap's z-up frame) mapped
+    // to the world by the same transform.
+    const outside = children.filter((c) => {
+      const [lo, hi] = worldBoxOfChild(c);
+      const got = viewer.pointBoxes[c.extras.submap];
+      if (!got) return true;
+      const tol = 1e-3 * Math.max(...hi.map((h, i) => h - lo[i]));
+      return got[0].some((x, i) => x < lo[i] - tol) || got[1].some((x, i) => x > hi[i] + tol);
+    }).map((c) => c.extras.submap);
+    check(outside.length === 0, `decoded points inside their tiles' bounding volumes in the world frame (outside: ${JSON.stringify(outside)})`);
+    console.log(`revisions applied by the viewer: ${JSON.stringify(viewer.revisionsApplied)}; ` +
+      `submap events ${viewer.submapEvents}, revision events ${viewer.revisionEvents}; ` +
+      `tiles moved after loading: ${moved}, transform updates ${viewer.transformUpdates}`);
+    // Contract: a `revision` event is sent after that revision's tileset.json is written.
+    check(viewer.staleTilesets === 0,
+      `tileset.json fetched after a revision event had that revision (${viewer.staleTilesets} stale fetches; ` +
+      'a stale tileset means the engine announced a revision before writing its tileset)');
+    if (report.revision > 1) {
+      check(viewer.revisionEvents > 1 && viewer.revisionsApplied.length > 1,
+        `several revisions followed over SSE (${viewer.revisionEvents} events, ${viewer.revisionsApplied.length} applied)`);
+    }
+    if (moved > 0) check(viewer.transformUpdates >= moved, `${moved} tiles moved by revisions without reloading`);
+
+
+    // 4. Screenshot: not blank; saved as the test's artifact.
+    const share = await nonBackgroundShare(page);
+    check(share > 0.005, `non-background pixels: ${(share * 100).toFixed(2)} % of the canvas`);
+    const shot = join(opt.out, 'viewer.png');
+    writeFileSync(shot, await page.screenshot());
+    console.log(`screenshot: ${shot}`);
+
+    // A chain of submaps without loops may keep its transforms from one revision to the next,
+    // so the move path is also driven directly: a next revision that shifts every tile by
+    // 10 m east, as the SSE `revision` handler would fetch it.
+    const shifted = JSON.parse(JSON.stringify(tileset));
+    shifted.extras.revision += 1;
+    shifted.asset.tilesetVersion = String(shifted.extras.revision);
+    for (const c of shifted.root.children) c.transform[12] += 10;
+    await page.route(/\/tileset\.json(\?|$)/, (route) => route.fulfill({ contentType: 'application/json', body: JSON.stringify(shifted) }));
+    await page.evaluate(() => window.glamViewer.refresh());
+    await page.unroute(/\/tileset\.json(\?|$)/);
+    const after = await page.evaluate(() => {
+      const v = window.glamViewer;
+      return { matrices: v.tileMatrices(), tileFetches: v.tileFetches, pointsLoaded: v.pointsLoaded, revision: v.revision };
+    });
+    const movedAll = shifted.root.children.every((c) => {
+      const m = after.matrices[c.extras.submap];
+      return m && m.current.every((x, i) => Math.abs(x - c.transform[i]) <= 1e-9 * (1 + Math.abs(x)));
+    });
+    check(movedAll && after.revision === shifted.extras.revision,
+      `revision ${shifted.extras.revision}: every tile moved to its new transform`);
+    check(JSON.stringify(after.tileFetches) === JSON.stringify(viewer.tileFetches) && after.pointsLoaded === viewer.pointsLoaded,
+      'tiles moved without being fetched or decoded again');
+
+    // 5. Benchmark: submap event -> tile visible.
+    const latencies = viewer.tileLatenciesMs.map((l) => l.ms);
+    console.log(`BENCH submap event -> tile visible: ${stats(latencies)}`);
+    console.log(`BENCH   waiting for the map revision: ${stats(viewer.tileLatenciesMs.map((l) => l.revisionWaitMs))}`);
+    console.log(`BENCH   fetch + Draco decode: ${stats(viewer.tileLatenciesMs.map((l) => l.loadMs))}`);
+    console.log(`BENCH   next frame drawn: ${stats(viewer.tileLatenciesMs.map((l) => l.drawMs))}`);
+    let dracoBytes = 0;
+    let quantizedBytes = 0;
+    for (const c of children) {
+      const uri = new URL(c.content.uri, `${base}/api/v1/jobs/${jobId}/tileset.json`);
+      const size = async (u) => (await (await fetch(u, { headers: { Authorization: `Bearer ${TOKEN}` } })).arrayBuffer()).byteLength;
+      dracoBytes += await size(uri);
+      uri.pathname = uri.pathname.replace(/\.glb$/, '.quantized.glb');
+      quantizedBytes += await size(uri);
+    }
+    const perPoint = (b) => (b / viewer.pointsLoaded).toFixed(2);
+    console.log(`BENCH tile bytes per point (whole GLB incl. camera path; raw float xyz + uint8 rgb = 15): ` +
+      `Draco ${perPoint(dracoBytes)}, quantized ${perPoint(quantizedBytes)} (${viewer.pointsLoaded} points, ${children.length} tiles)`);
+    const align = (report.alignment && report.alignment.per_submap) || [];
+    console.log(`BENCH   server alignment per submap (report.json total_s): ${stats(align.map((a) => a.total_s * 1000))}`);
+
+    // 6. A standard 3D Tiles client on the quantized tileset, from a page of the same origin.
+    const clientPage = await browser.newPage();
+    clientPage.on('pageerror', (e) => console.log(`tiles client page error: ${e.message}`));
+    await clientPage.route(`${base}/__browser_test/tiles.html`, (route) => route.fulfill({
+      contentType: 'text/html',
+      body: `<!doctype html><html><body><script>${bundle.outputFiles[0].text}</script></body></html>`,
+    }));
+    await clientPage.goto(`${base}/__browser_test/tiles.html`);
+    const quantized = await clientPage.evaluate(
+      ([url, token]) => window.runTilesClient(url, token, 60000),
+      [`${base}/api/v1/jobs/${jobId}/tileset.json?format=quantized`, TOKEN]);
+    check(quantized.childTiles === children.length && quantized.modelsLoaded === children.length,
+      `3DTilesRendererJS loaded ${quantized.modelsLoaded} of ${quantized.childTiles} child tiles (tileset: ${children.length})`);
+    check(quantized.points === viewer.pointsLoaded,
+      `3DTilesRendererJS decoded ${quantized.points} points == viewer's ${viewer.pointsLoaded} (all tiles)`);
+  } finally {
+    await browser.close();
+    const exited = new Promise((r) => child.once('exit', r));
+    child.kill('SIGTERM');
+    await exited;
+    rmSync(dataDir, { recursive: true, force: true });
+  }
+}
+
+main().then(() => {
+  console.log(failures === 0 ? 'browser test passed' : `browser test: ${failures} check(s) failed`);
+  process.exit(failures === 0 ? 0 : 1);
+}, (err) => {
+  console.error(`browser test failed: ${err.stack || err.message}`);
+  process.exit(1);
+});

@@ -1,0 +1,113 @@
+// REST client of the viewer. Every URL is relative to the page (the server may be reached
+// under any host name or behind a path prefix). The API token comes from `?token=` in the page
+// URL or from the token field, is kept in localStorage, and is sent as a Bearer header on
+// fetch/XHR; EventSource and plain download links cannot set headers, so they get `?token=`.
+
+const TOKEN_KEY = 'glam.apiToken';
+
+export function apiUrl(path) {
+  return new URL(`api/v1/${path}`, document.baseURI).toString();
+}
+
+export function getToken() {
+  return localStorage.getItem(TOKEN_KEY) || '';
+}
+
+export function setToken(token) {
+  if (token) localStorage.setItem(TOKEN_KEY, token);
+  else localStorage.removeItem(TOKEN_KEY);
+}
+
+// Moves `?token=` from the address bar into localStorage so that it is not left in the
+// history or in shared links.
+export function adoptTokenFromUrl() {
+  const url = new URL(location.href);
+  const token = url.searchParams.get('token');
+  if (token === null) return;
+  setToken(token);
+  url.searchParams.delete('token');
+  history.replaceState(null, '', url.toString());
+}
+
+export function authHeaders() {
+  const token = getToken();
+  return token ? { Authorization: `Bearer ${token}` } : {};
+}
+
+// For URLs that the browser fetches by itself (EventSource, <a download>).
+export function withToken(url) {
+  const token = getToken();
+  if (!token) return url;
+  const u = new URL(url, document.baseURI);
+  u.searchParams.set('token', token);
+  return u.toString();
+}
+
+export class ApiError extends Error {
+  constructor(status, code, message) {
+    super(message);
+    this.status = status;
+    this.code = code;
+  }
+}
+
+async function errorFrom(response) {
+  let code = 'error';
+  let message = `HTTP ${response.status}`;
+  try {
+    const body = await response.json();
+    if (body && body.error) ({ code, message } = body.error);
+  } catch {
+    // not JSON: keep the status line
+  }
+  return new ApiError(response.status, code, message);
+}
+
+export async function apiFetch(url, init = {}) {
+  const response = await fetch(url, { ...init, headers: { ...authHeaders(), ...(init.headers || {}) } });
+  if (!response.ok) throw await errorFrom(response);
+  return response;
+}
+
+export async function getJson(path) {
+  return (await apiFetch(apiUrl(path), { cache: 'no-cache' })).json();
+}
+
+export const listJobs = (limit = 50) => getJson(`jobs?limit=${limit}`);
+export const getJob = (id) => getJson(`jobs/${encodeURIComponent(id)}`);
+
+export async function cancelJob(id) {
+  return (await apiFetch(apiUrl(`jobs/${encodeURIComponent(id)}/cancel`), { method: 'POST' })).json();
+}
+
+export async function deleteJob(id) {
+  await apiFetch(apiUrl(`jobs/${encodeURIComponent(id)}`), { method: 'DELETE' });
+}
+
+// Multipart upload through XHR because fetch has no upload progress. options: the job
+// options object of docs/api.md ("Creating a job"). onProgress(fraction in 0..1).
+export function uploadVideo(file, options, onProgress) {
+  return new Promise((resolve, reject) => {
+    const form = new FormData();
+    form.append('video', file, file.name);
+    if (options && Object.keys(options).length > 0) form.append('options', JSON.stringify(options));
+    const xhr = new XMLHttpRequest();
+    xhr.open('POST', apiUrl('jobs'));
+    for (const [k, v] of Object.entries(authHeaders())) xhr.setRequestHeader(k, v);
+    xhr.responseType = 'json';
+    xhr.upload.onprogress = (e) => {
+      if (e.lengthComputable && onProgress) onProgress(e.loaded / e.total);
+    };
+    xhr.onload = () => {
+      const body = xhr.response;
+      if (xhr.status === 201) {
+        resolve(body);
+      } else {
+        const err = body && body.error ? body.error : { code: 'error', message: `HTTP ${xhr.status}` };
+        reject(new ApiError(xhr.status, err.code, err.message));
+      }
+    };
+    xhr.onerror = () => reject(new ApiError(0, 'network', 'network error during upload'));
+    xhr.send(form);
+  });
+}

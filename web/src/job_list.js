@@ -1,0 +1,79 @@
+// The job table of the start page: state, progress, ETA and actions, refreshed by polling
+// GET /jobs (one request every 2 s is cheaper for the server than an event stream per job,
+// and event streams are a limited resource: --max-sse-clients).
+
+import { apiUrl, cancelJob, deleteJob, listJobs, withToken } from './api.js';
+import { escapeHtml, formatCount, formatDuration, jobFraction } from './format.js';
+
+const DOWNLOADS = [
+  ['trajectory', 'trajectory.tum'],
+  ['points', 'points.ply'],
+  ['map_glb', 'map.glb'],
+  ['report', 'report.json'],
+];
+
+function row(job) {
+  const p = job.progress || {};
+  const fraction = jobFraction(job);
+  const active = job.state === 'queued' || job.state === 'running';
+  const downloads = job.state === 'completed'
+    ? DOWNLOADS.map(([, file]) => {
+      const href = withToken(apiUrl(`jobs/${job.id}/${file}`));
+      return `<a href="${escapeHtml(href)}" download>${file}</a>`;
+    }).join(' ')
+    : '';
+  return `<tr data-id="${escapeHtml(job.id)}" data-state="${escapeHtml(job.state)}">
+    <td><a href="?job=${encodeURIComponent(job.id)}">${escapeHtml(job.name || job.id)}</a></td>
+    <td class="state ${escapeHtml(job.state)}">${escapeHtml(job.state)}${job.error ? `<div class="error">${escapeHtml(job.error)}</div>` : ''}</td>
+    <td><progress max="1" ${fraction === null ? '' : `value="${fraction}"`}></progress>
+        <span class="small">${escapeHtml(p.stage || '')} ${formatCount(p.frames_done)}/${p.frames_total > 0 ? formatCount(p.frames_total) : '?'}</span></td>
+    <td>${active ? formatDuration(p.eta_s) : '–'}</td>
+    <td>${formatCount(p.submaps_completed)}</td>
+    <td>${formatCount(p.points)}</td>
+    <td class="actions">
+      <a class="button" href="?job=${encodeURIComponent(job.id)}">view</a>
+      ${active ? '<button data-action="cancel">cancel</button>' : ''}
+      <button data-action="delete">delete</button>
+      ${downloads}
+    </td></tr>`;
+}
+
+export function setupJobList(root) {
+  const body = root.querySelector('#jobs tbody');
+  const status = root.querySelector('#jobs-status');
+  let timer = null;
+
+  async function refresh() {
+    try {
+      const page = await listJobs(50);
+      body.innerHTML = page.jobs.map(row).join('');
+      status.textContent = page.total > page.jobs.length
+        ? `${page.jobs.length} of ${page.total} jobs` : `${page.total} job${page.total === 1 ? '' : 's'}`;
+    } catch (err) {
+      status.textContent = err.status === 401
+        ? 'The server needs an API token: enter it above.' : `Cannot list jobs: ${err.message}`;
+    }
+  }
+
+  body.addEventListener('click', async (e) => {
+    const button = e.target.closest('button[data-action]');
+    if (!button) return;
+    const id = button.closest('tr').dataset.id;
+    const action = button.dataset.action;
+    if (action === 'delete' && !confirm('Delete this job and all its files?')) return;
+    button.disabled = true;
+    try {
+      if (action === 'cancel') await cancelJob(id);
+      else await deleteJob(id);
+    } catch (err) {
+      status.textContent = `${action} failed: ${err.message}`;
+    }
+    refresh();
+  });
+
+  function start() {
+    refresh();
+    if (timer === null) timer = setInterval(refresh, 2000);
+  }
+  return { refresh, start };
+}
