@@ -1,0 +1,56 @@
+#!/usr/bin/env bash
+# Scale run of issue 8: one long synthetic lawnmower flight (default 20,000 frames, 640x360,
+# 100 m altitude, seed 11 — a seed no test uses) through `glam map`, sampling the mapper's
+# resident memory (/proc/PID/status VmRSS) and its progress (frames done, from the progress
+# lines `glam map` logs) and CPU time (utime + stime of /proc/PID/stat) every few seconds.
+# Throughput is reported both per wall second and per CPU second: the machine is shared, and
+# frames per CPU second is the measure that other processes' load does not distort. Writes out/bench/scale/<FRAMES>/{samples.tsv,
+# summary.md} and the plot docs/images/bench/scale_fps_rss.png.
+# Usage: bench/scale/run.sh [BUILD_DIR] [FRAMES]   (defaults: build, 20000)
+# Runs under `nice -n 10`; takes about an hour on 2 cores (render + map).
+set -euo pipefail
+# Debian's python3 (numpy, matplotlib from bench/colmap/setup.sh), not a pyenv/venv one.
+PY="${PYTHON:-/usr/bin/python3}"
+BUILD_DIR="${1:-build}"
+FRAMES="${2:-20000}"
+GLAM="$(realpath "$BUILD_DIR/server/glam")"
+HERE="$(cd "$(dirname "$0")" && pwd)"
+ROOT="$(cd "$HERE/../.." && pwd)"
+WORK="$ROOT/out/bench/scale/$FRAMES"
+INTERVAL="${SAMPLE_INTERVAL:-5}"
+mkdir -p "$WORK"
+cd "$ROOT"
+
+echo "commit $(git rev-parse --short HEAD 2>/dev/null || echo unknown), $(nproc) cores" | tee "$WORK/machine.txt"
+
+synth_start=$(date +%s)
+nice -n 10 "$GLAM" --log-level warn synth --trajectory lawnmower --frames "$FRAMES" --width 640 \
+  --height 360 --altitude 100 --seed 11 --crf 20 --out "$WORK/gt"
+echo "synth_seconds $(( $(date +%s) - synth_start ))" | tee "$WORK/synth_time.txt"
+ls -l "$WORK/gt/video.mp4"
+
+rm -rf "$WORK/map"
+start=$(date +%s.%N)
+nice -n 10 "$GLAM" --log-level info map "$WORK/gt/video.mp4" --intrinsics "$WORK/gt/intrinsics.json" \
+  --out "$WORK/map" > "$WORK/map.log" 2>&1 &
+PID=$!
+printf 't_s\trss_mb\tframes_done\tsubmaps\tcpu_s\n' > "$WORK/samples.tsv"
+TICKS=$(getconf CLK_TCK)
+while kill -0 "$PID" 2>/dev/null; do
+  rss=$(awk '/^VmRSS/ {print $2}' "/proc/$PID/status" 2>/dev/null || true)
+  line=$(grep -a -o '[0-9]*/[0-9]* frames .*submaps [0-9]*' "$WORK/map.log" | tail -n 1 || true)
+  done_frames=$(echo "$line" | sed -n 's#^\([0-9]*\)/.*#\1#p')
+  submaps=$(echo "$line" | sed -n 's#.*submaps \([0-9]*\).*#\1#p')
+  # Fields 14 and 15 of /proc/PID/stat (after the parenthesised command name).
+  cpu=$(sed 's/^.*) //' "/proc/$PID/stat" 2>/dev/null | awk -v hz="$TICKS" '{print ($12 + $13) / hz}' || true)
+  now=$(date +%s.%N)
+  [ -n "$rss" ] && [ -n "$cpu" ] && printf '%.1f\t%.1f\t%s\t%s\t%s\n' "$(echo "$now - $start" | bc)" \
+    "$(echo "$rss / 1024" | bc -l)" "${done_frames:-0}" "${submaps:-0}" "$cpu" >> "$WORK/samples.tsv"
+  sleep "$INTERVAL"
+done
+wait "$PID"
+end=$(date +%s.%N)
+echo "map_wall_seconds $(echo "$end - $start" | bc)" | tee "$WORK/map_time.txt"
+
+nice -n 10 "$GLAM" --log-level warn eval --gt "$WORK/gt" --result "$WORK/map" --json "$WORK/eval.json" || true
+"$PY" "$HERE/summarize.py" "$WORK" "$ROOT/docs/images/bench/scale_fps_rss.png"

@@ -1,0 +1,152 @@
+#!/usr/bin/python3
+"""Summarises a scale run of bench/scale/run.sh: peak RSS, fps in the first and last tenth of
+the frames, submaps, graph size, alignment latency, and a linear extrapolation to 100,000
+frames; draws fps, RSS and alignment latency over the run. Works on a partial run too
+(samples only; report.json is written at the end).
+Usage: summarize.py WORK_DIR PLOT_PNG [TARGET_FRAMES=100000]"""
+import json
+import os
+import sys
+
+import numpy as np
+
+
+def main():
+    work, png = sys.argv[1], sys.argv[2]
+    target = int(sys.argv[3]) if len(sys.argv) > 3 else 100000
+    s = np.genfromtxt(os.path.join(work, "samples.tsv"), names=True, delimiter="\t")
+    t, rss, done = s["t_s"], s["rss_mb"], s["frames_done"]
+    rep_path = os.path.join(work, "map", "report.json")
+    rep = json.load(open(rep_path)) if os.path.exists(rep_path) else None
+    total = rep["frames_decoded"] if rep else int(done.max())
+    finished = rep is not None
+    print(open(os.path.join(work, "machine.txt")).read().strip())
+    print(f"run {'finished' if finished else 'PARTIAL (still running or stopped)'}: "
+          f"{int(done.max())} frames done after {t.max():.0f} s")
+    print(f"peak RSS (sampled every {np.median(np.diff(t)):.0f} s): {rss.max():.0f} MB")
+
+    # Time at which a frame count was reached (progress is monotone; interpolate).
+    keep = np.concatenate([[True], np.diff(done) > 0])
+    tt, dd = t[keep], done[keep]
+
+    def time_at(frames):
+        return float(np.interp(frames, dd, tt))
+
+    n = int(done.max())
+    tenth = n / 10
+    fps_first = tenth / (time_at(tenth) - time_at(0 if dd[0] == 0 else dd[0]))
+    fps_last = tenth / (time_at(n) - time_at(n - tenth))
+    print(f"fps in the first tenth (frames 0-{tenth:.0f}): {fps_first:.2f}; last tenth "
+          f"(frames {n - tenth:.0f}-{n}): {fps_last:.2f}; decay {100 * (1 - fps_last / fps_first):.1f} %")
+    cpu = s["cpu_s"][keep] if "cpu_s" in s.dtype.names else None
+    if cpu is not None:
+        def cpu_at(frames):
+            return float(np.interp(frames, dd, cpu))
+        cfirst = tenth / (cpu_at(tenth) - cpu_at(dd[0]))
+        clast = tenth / (cpu_at(n) - cpu_at(n - tenth))
+        print(f"frames per CPU second (load-independent): first tenth {cfirst:.2f}, last tenth "
+              f"{clast:.2f}; decay {100 * (1 - clast / cfirst):.1f} %; {cpu.max():.0f} CPU s in all")
+    if os.path.exists(os.path.join(work, "map_time.txt")):
+        wall = float(open(os.path.join(work, "map_time.txt")).read().split()[1])
+        print(f"wall time {wall:.0f} s = {n / wall:.2f} fps overall")
+
+    # Trends: RSS grows while a submap is open (its frames' features are kept until the
+    # submap completes; bounded by max_frames_per_submap) and drops back when it completes, so
+    # only the baseline after each completion extrapolates. That needs several completed
+    # submaps; a shorter run prints why it skips the extrapolation.
+    sub = s["submaps"]
+    completed = int(sub.max())
+    if completed >= 5:
+        base_f, base_r = [], []
+        for k in range(1, completed + 1):
+            m = sub == k
+            if m.any():
+                i = np.argmin(np.where(m, rss, np.inf))
+                base_f.append(done[i])
+                base_r.append(rss[i])
+        slope, icpt = np.polyfit(base_f, base_r, 1)
+        excursion = float((rss - (icpt + slope * done)).max())
+        print(f"RSS baseline after submap completions grows {slope * 1000:.1f} MB per 1000 frames; "
+              f"open-submap excursion up to {excursion:.0f} MB -> ~{icpt + slope * target + excursion:.0f} MB "
+              f"peak at {target} frames (linear extrapolation of the baseline)")
+        win = max(5, len(tt) // 40)
+        cps = (dd[win:] - dd[:-win]) / np.maximum(cpu[win:] - cpu[:-win], 1e-6) if cpu is not None else None
+        mid = 0.5 * (dd[win:] + dd[:-win])
+        sel = mid > n / 10
+        if cps is not None and sel.sum() > 3:
+            b, a = np.polyfit(mid[sel], cps[sel], 1)
+            print(f"frames per CPU second trend after the first tenth: {b * 1000:+.3f} per 1000 frames -> "
+                  f"{a + b * target:.2f} at {target} frames ({100 * (1 - (a + b * target) / (a + b * n / 10)):.1f} % "
+                  "decay vs the start of the trend, linear extrapolation)")
+    else:
+        print(f"only {completed} submap(s) completed during sampling: too short for a trend, "
+              "no extrapolation")
+    win = max(5, len(tt) // 40)
+    fps_w = (dd[win:] - dd[:-win]) / (tt[win:] - tt[:-win])
+    mid = 0.5 * (dd[win:] + dd[:-win])
+
+    lat = None
+    if rep:
+        g = rep.get("graph", {})
+        a = rep.get("alignment", {})
+        print(f"frames decoded {rep['frames_decoded']}, posed {rep['frames_posed']}, submaps "
+              f"{rep['submaps']}, keyframes {rep['keyframes']}, points {rep['points']}")
+        print(f"graph: {g.get('edges')} edges ({g.get('retrieved_edges')} retrieved), "
+              f"{g.get('landmarks')} landmarks")
+        per = a.get("per_submap", [])
+        if per:
+            lat = np.array([[p["submap"], p["total_s"], p.get("optimization_s", 0)] for p in per])
+            k = max(1, len(lat) // 10)
+            print(f"alignment latency: mean {a.get('mean_latency_s', 0):.2f} s, max "
+                  f"{a.get('max_latency_s', 0):.2f} s; mean of the first tenth of submaps "
+                  f"{lat[:k, 1].mean():.2f} s, last tenth {lat[-k:, 1].mean():.2f} s "
+                  f"(optimisation {lat[:k, 2].mean():.2f} s -> {lat[-k:, 2].mean():.2f} s)")
+        graph_path = os.path.join(work, "map", "graph.json")
+        if os.path.exists(graph_path):
+            gj = json.load(open(graph_path))
+            print(f"graph.json: {len(gj['nodes'])} nodes, {len(gj['edges'])} edges, "
+                  f"{gj.get('graph_landmarks')} landmark nodes, "
+                  f"{sum(1 for x in gj['nodes'] if x.get('disconnected'))} disconnected, "
+                  f"{os.path.getsize(graph_path) / 1e6:.1f} MB")
+    ev = os.path.join(work, "eval.json")
+    if os.path.exists(ev):
+        e = json.load(open(ev))
+        tr, mp = e["trajectory"], e.get("map") or {}
+        print(f"accuracy: fraction posed {tr['fraction_posed']:.3f}, ATE {tr['ate_rmse_m']:.2f} m, "
+              f"scale drift {tr['scale_drift_percent']:.2f} %, map median {mp.get('median_m', float('nan')):.2f} m")
+
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    rows = 3 if lat is not None else 2
+    fig, axes = plt.subplots(rows, 1, figsize=(6.5, 2.3 * rows), dpi=80)
+    axes[0].plot(mid, fps_w, "C0-", label="frames per wall second")
+    if cpu is not None:
+        cps = (dd[win:] - dd[:-win]) / np.maximum(cpu[win:] - cpu[:-win], 1e-6)
+        axes[0].plot(mid, cps, "C1-", label="frames per CPU second")
+    axes[0].legend(fontsize=8)
+    axes[0].set_ylabel("throughput")
+    axes[0].set_xlabel("frames done")
+    axes[0].set_title(f"scale run: {n} frames, 640x360" + ("" if finished else " (partial)"))
+    axes[0].grid(alpha=0.3)
+    axes[1].plot(done, rss, "C3-")
+    for k in range(1, completed + 1):
+        m = np.nonzero(sub >= k)[0]
+        if len(m):
+            axes[1].axvline(done[m[0]], color="0.6", lw=0.8, ls=":")
+    axes[1].set_ylabel("RSS (MB); : submap done")
+    axes[1].set_xlabel("frames done")
+    axes[1].grid(alpha=0.3)
+    if lat is not None:
+        axes[2].plot(lat[:, 0], lat[:, 1], "C2.", ms=3, label="total")
+        axes[2].plot(lat[:, 0], lat[:, 2], "C1.", ms=3, label="optimisation")
+        axes[2].set_ylabel("alignment (s)")
+        axes[2].set_xlabel("submap")
+        axes[2].legend(fontsize=8)
+        axes[2].grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(png)
+
+
+if __name__ == "__main__":
+    main()
