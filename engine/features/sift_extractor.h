@@ -53,6 +53,10 @@ class SiftExtractor {
   cv::Ptr<cv::SIFT> sift_;
 };
 
+// Offset (pixels, in x and y) of cv::SIFT keypoints relative to the integer-pixel-centre
+// convention, subtracted by SiftExtractor (see Extract and tests/features).
+inline constexpr float kSiftKeypointOffset = 0.25f;
+
 // In-place RootSIFT on CV_32F rows.
 void ApplyRootSift(cv::Mat* descriptors);
 

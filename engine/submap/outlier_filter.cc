@@ -16,6 +16,32 @@ void OutlierFilterOptions::Check() const {
   CheckGreaterEqual("OutlierFilterOptions.min_observations", min_observations, 2);
   CheckGreater("OutlierFilterOptions.neighbours", neighbours, 0);
   CheckGreater("OutlierFilterOptions.max_std_devs", max_std_devs, 0.0);
+  CheckInRange("OutlierFilterOptions.min_completion_angle_deg", min_completion_angle_deg, 0.0, 90.0);
+}
+
+std::size_t RemoveWeaklyTriangulatedLandmarks(const std::vector<Keyframe>& keyframes,
+                                              std::vector<Landmark>& landmarks,
+                                              const OutlierFilterOptions& options) {
+  if (options.min_completion_angle_deg <= 0) return 0;
+  const double min_cos = std::cos(options.min_completion_angle_deg * M_PI / 180.0);
+  std::vector<Eigen::Vector3d> centres;
+  centres.reserve(keyframes.size());
+  for (const Keyframe& kf : keyframes) centres.push_back(kf.cam_from_submap.Inverse().translation());
+  const std::size_t before = landmarks.size();
+  std::vector<Eigen::Vector3d> rays;
+  std::erase_if(landmarks, [&](const Landmark& lm) {
+    rays.clear();
+    for (const Observation& obs : lm.observations) {
+      rays.push_back((lm.point_in_submap - centres[obs.keyframe]).normalized());
+    }
+    for (std::size_t a = 0; a < rays.size(); ++a) {
+      for (std::size_t b = a + 1; b < rays.size(); ++b) {
+        if (rays[a].dot(rays[b]) <= min_cos) return false;  // wide enough
+      }
+    }
+    return true;
+  });
+  return before - landmarks.size();
 }
 
 std::size_t RemoveReprojectionOutliers(const Intrinsics& intrinsics,

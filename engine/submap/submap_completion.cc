@@ -47,6 +47,7 @@ Submap SubmapBuilder::Complete() {
   const std::size_t before = open_.landmarks.size();
   RemoveReprojectionOutliers(camera.intrinsics(), open_.keyframes, open_.landmarks, options_.outlier_filter);
   RemoveIsolatedLandmarks(open_.landmarks, options_.outlier_filter);
+  RemoveWeaklyTriangulatedLandmarks(open_.keyframes, open_.landmarks, options_.outlier_filter);
   RelocaliseFrames();
 
   Submap submap;

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include "engine/core/error.h"
+
 namespace glam {
 namespace {
 
@@ -64,6 +66,30 @@ TEST(OutlierFilter, ReprojectionFilterDropsBadObservationsAndOrphans) {
   EXPECT_EQ(lms[0].observations.size(), 3u);
   EXPECT_EQ(lms[1].observations.size(), 2u);
   EXPECT_EQ(lms[1].point_in_submap, Eigen::Vector3d(-1, 1, 20));
+}
+
+TEST(OutlierFilter, CompletionDropsLandmarksWhoseRaysNeverWidened) {
+  // Keyframes 1 m apart along x, points 20 m ahead: two adjacent keyframes see a point under
+  // ~2.9 degrees, keyframes 0 and 3 under ~8.6 degrees.
+  std::vector<Keyframe> kfs(4);
+  for (int k = 0; k < 4; ++k) kfs[k].cam_from_submap = SE3(SO3(), Eigen::Vector3d(-k * 1.0, 0, 0));
+  auto landmark = [](std::vector<std::uint32_t> keyframes) {
+    Landmark lm;
+    lm.point_in_submap = {1.5, 0, 20};
+    for (std::uint32_t k : keyframes) lm.observations.push_back({k, Eigen::Vector2f(0, 0)});
+    return lm;
+  };
+  std::vector<Landmark> lms = {landmark({0, 1}), landmark({1, 2, 3}), landmark({0, 3}), landmark({2, 3})};
+  OutlierFilterOptions options;
+  options.min_completion_angle_deg = 4.0;
+  EXPECT_EQ(RemoveWeaklyTriangulatedLandmarks(kfs, lms, options), 2u);
+  ASSERT_EQ(lms.size(), 2u);
+  EXPECT_EQ(lms[0].observations.size(), 3u);  // keyframes 1 and 3: ~5.7 degrees
+  EXPECT_EQ(lms[1].observations.size(), 2u);  // keyframes 0 and 3
+  options.min_completion_angle_deg = 0;  // off
+  EXPECT_EQ(RemoveWeaklyTriangulatedLandmarks(kfs, lms, options), 0u);
+  options.min_completion_angle_deg = -1;
+  EXPECT_THROW(options.Check(), InputError);
 }
 
 }  // namespace
