@@ -31,7 +31,9 @@ print(f"frames {frames} at 1280x720 ({r['processing_size'][0]}x{r['processing_si
 print(f"decode only (ffmpeg, 2 threads): {frames / (d1 - d0):.1f} fps")
 print(f"glam map end to end:            {r['processing_fps']:.1f} fps ({t['total']:.1f} s)")
 print(f"  decode + SIFT thread busy {t['decode_and_features']:.1f} s, builder {t['builder']:.1f} s "
-      f"(bundle adjustment {t['bundle_adjustment']:.1f} s), chaining {t['chaining']:.2f} s, writing {t['writing']:.2f} s")
+      f"(bundle adjustment {t['bundle_adjustment']:.1f} s), alignment {t['alignment']:.2f} s, writing {t['writing']:.2f} s")
+print(f"  tiles (Draco + quantized GLB per submap): {t['tiles']:.3f} s for {r['submaps']} submaps "
+      f"({1000 * t['tiles'] / max(1, r['submaps']):.0f} ms each), {r['points']} points")
 print(f"  posed {r['frames_posed']}/{r['frames_decoded']}, submaps {r['submaps']}, keyframes {r['keyframes']}, points {r['points']}")
 tr, m = e["trajectory"], e.get("map") or {}
 print(f"  accuracy: ATE {tr['ate_rmse_m']:.3f} m, scale drift {tr['scale_drift_percent']:.2f} %, "

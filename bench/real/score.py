@@ -12,9 +12,9 @@ import numpy as np
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "colmap"))
 from benchlib import umeyama  # noqa: E402
 
-RESULTS = {"glam_intrinsics": ("GLAM, EXIF focal as intrinsics", "glam_intrinsics/trajectory.tum"),
-           "glam_no_intrinsics": ("GLAM, no intrinsics", "glam_no_intrinsics/trajectory.tum"),
-           "glam_intrinsics_8000": ("GLAM, EXIF focal, --max-features 8000",
+RESULTS = {"glam_intrinsics": ("GLAM, EXIF focal as intrinsics, 2000 features", "glam_intrinsics/trajectory.tum"),
+           "glam_no_intrinsics": ("GLAM, no intrinsics, 2000 features", "glam_no_intrinsics/trajectory.tum"),
+           "glam_intrinsics_8000": ("GLAM, EXIF focal, 8000 features (folder default)",
                                     "glam_intrinsics_8000/trajectory.tum"),
            "colmap": ("COLMAP (exhaustive)", "colmap/result/trajectory.tum")}
 

@@ -141,6 +141,7 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   report.input = input.string();
   report.fps = info.fps > 0 ? info.fps : 1.0;
   report.initial_focal = intrinsics.fx;
+  report.sift_max_features = options.sift.max_features;
   report.processing_width = info.processing_size.width;
   report.processing_height = info.processing_size.height;
   if (info.frame_count > 0) {
@@ -212,12 +213,15 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
     progress(state);
   };
   double writing = 0;
+  double tile_writing = 0;
   auto consume = [&](std::vector<Submap> completed) {
     for (std::size_t i = 0; i < completed.size(); ++i) {
       Submap& submap = completed[i];
       const auto write_start = Clock::now();
       WriteSubmap(submap, submaps_root);
+      const auto tiles_start = Clock::now();
       tiles.OnSubmapCompleted(submap);
+      tile_writing += Seconds(tiles_start);
       WriteCheckpoint(out_dir, MakeCheckpoint(builder, completed, i, report, run_id));
       writing += Seconds(write_start);
       GLAM_LOG_INFO("submap {} completed: frames {}-{}, {} keyframes, {} landmarks", submap.id,
@@ -314,6 +318,7 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   report.timings.bundle_adjust_s = stats.bundle_adjust_seconds;
   report.timings.alignment_s = alignment.busy_seconds();
   report.timings.writing_s = writing;
+  report.timings.tiles_s = tile_writing;
   report.timings.total_s = Seconds(start);
   report.processing_fps = report.timings.total_s > 0
                               ? static_cast<double>(worker.frames()) / report.timings.total_s

@@ -85,6 +85,7 @@ nlohmann::json MappingReport::ToJson() const {
           {"graph", {{"edges", graph_edges}, {"retrieved_edges", retrieved_edges}, {"landmarks", graph_landmarks}}},
           {"alignment", AlignmentJson(alignment)},
           {"initial_focal_px", initial_focal},
+          {"sift_max_features", sift_max_features},
           {"focal_px", focal},
           {"focal_original_px", focal_original},
           {"fps", fps},
@@ -98,6 +99,7 @@ nlohmann::json MappingReport::ToJson() const {
             {"bundle_adjustment", timings.bundle_adjust_s},
             {"alignment", timings.alignment_s},
             {"writing", timings.writing_s},
+            {"tiles", timings.tiles_s},
             {"total", timings.total_s}}}};
 }
 

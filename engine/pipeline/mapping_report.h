@@ -17,7 +17,8 @@ struct MappingTimings {
   double builder_s = 0;              // submap builder time, including BA
   double bundle_adjust_s = 0;        // of which bundle adjustment
   double alignment_s = 0;            // thread 2 busy time (retrieval, verification, graph)
-  double writing_s = 0;              // submaps and whole-map files
+  double writing_s = 0;              // submaps, tiles and whole-map files
+  double tiles_s = 0;                // of writing_s: encoding + writing the per-submap tiles
   double total_s = 0;
 };
 
@@ -44,6 +45,7 @@ struct MappingReport {
   // Thread 2's work per submap, in order (report.json "alignment").
   std::vector<SubmapAlignmentTiming> alignment;
   double initial_focal = 0;  // processing pixels
+  int sift_max_features = 0;  // SIFT features per frame asked for (SiftOptions::max_features)
   double focal = 0;          // estimate, processing pixels
   double focal_original = 0; // estimate, original-resolution pixels
   double fps = 0;            // input frame rate

@@ -339,6 +339,18 @@ TEST_F(BadInputTest, ImageFolderWithNonImageFilesMapsTheImages) {
   EXPECT_TRUE(Mentions(r.output, "frame_999_corrupt.jpg")) << r.output;  // skipped, with a word
   EXPECT_TRUE(Mentions(r.output, "._frame_000.png")) << r.output;
   EXPECT_GT(report.at("frames_posed").get<int>(), 0) << r.output;
+  // A photo folder gets the photo default of SIFT features unless --max-features says otherwise.
+  EXPECT_EQ(report.at("sift_max_features").get<int>(), 8000);
+  // Tile encoding is part of the writing time, which is part of the total.
+  const nlohmann::json& t = report.at("timings_s");
+  EXPECT_GT(t.at("tiles").get<double>(), 0.0);
+  EXPECT_LE(t.at("tiles").get<double>(), t.at("writing").get<double>());
+  EXPECT_LE(t.at("writing").get<double>(), t.at("total").get<double>());
+  const fs::path explicit_out = dir_ / "out_folder_explicit";
+  const CliResult e = RunGlam({"map", folder.string(), "--out", explicit_out.string(), "--max-features", "3000"},
+                              dir_ / "folder_explicit.log");
+  ASSERT_EQ(e.exit_code, 0) << e.output;
+  EXPECT_EQ(nlohmann::json::parse(std::ifstream(explicit_out / "report.json")).at("sift_max_features").get<int>(), 3000);
 }
 
 TEST_F(BadInputTest, EmptyJunkOnlyOrUndecodableFolderExitsTwo) {
