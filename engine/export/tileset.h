@@ -13,9 +13,10 @@
 // this small file only. Tiles are therefore served as immutable; but a job mapped again from
 // the start (restart, another engine version) writes new tiles under the same file names, so
 // content URIs carry the run's id as a query (`tiles/3.glb?v=<run_id>`): a client that cached
-// an earlier run's tile asks for a new URL instead of reusing stale bytes. Submaps without a tile box (empty submaps) are left out of the
-// children; the root then still exists (3D Tiles needs one) with a tiny box at the origin
-// when there is no child at all.
+// an earlier run's tile asks for a new URL instead of reusing stale bytes.
+//
+// Submaps without a tile box (empty submaps) are left out of the children; the root then
+// still exists (3D Tiles needs one) with a tiny box at the origin when there is no child.
 #pragma once
 
 #include <Eigen/Core>

@@ -193,6 +193,9 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   state.frames_done = first_frame;
   auto last_progress = Clock::now() - std::chrono::seconds(1);
   std::int64_t submaps_completed = resume ? resume->next_submap_id : 0;
+  // The map revision clients are told about: the one whose tileset.json is on disk, not thread
+  // 2's latest, so a client told about a revision can fetch its tileset (0 before the first).
+  auto published_revision = [&tiles] { return std::max<std::int64_t>(0, tiles.last_revision_written()); };
   auto emit = [&](bool force) {
     if (!progress) return;
     if (!force && Clock::now() - last_progress < std::chrono::milliseconds(250)) return;
@@ -205,9 +208,7 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
                       : -1;
     state.submaps_completed = submaps_completed;
     state.submaps_aligned = alignment.submaps_aligned();
-    // The revision whose tileset.json is on disk, not thread 2's latest: a client told about
-    // a revision must be able to fetch its tileset.
-    state.revision = std::max<std::int64_t>(0, tiles.last_revision_written());
+    state.revision = published_revision();
     state.keyframes = builder.stats().keyframes;
     state.points = alignment.points();
     progress(state);
@@ -240,7 +241,7 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
       cancel.ThrowIfCancelled();
       alignment.RethrowIfFailed();
       std::optional<FrameFeatures> item = queue.PopFor(std::chrono::milliseconds(100));
-      if (alignment.revision() > std::max<std::int64_t>(0, tiles.last_revision_written())) {  // a new map revision
+      if (alignment.revision() > published_revision()) {  // a new map revision
         tiles.OnRevision(*aligner.snapshot());
         emit(true);
       }

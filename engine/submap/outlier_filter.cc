@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "engine/core/options.h"
+#include "engine/geometry/triangulation.h"
 #include "engine/submap/bundle_adjuster.h"
 
 namespace glam {
@@ -23,20 +24,18 @@ std::size_t RemoveWeaklyTriangulatedLandmarks(const std::vector<Keyframe>& keyfr
                                               std::vector<Landmark>& landmarks,
                                               const OutlierFilterOptions& options) {
   if (options.min_completion_angle_deg <= 0) return 0;
-  const double min_cos = std::cos(options.min_completion_angle_deg * M_PI / 180.0);
+  const double min_angle = options.min_completion_angle_deg * M_PI / 180.0;
   std::vector<Eigen::Vector3d> centres;
   centres.reserve(keyframes.size());
-  for (const Keyframe& kf : keyframes) centres.push_back(kf.cam_from_submap.Inverse().translation());
+  for (const Keyframe& kf : keyframes) centres.push_back(CameraCenter(kf.cam_from_submap));
   const std::size_t before = landmarks.size();
-  std::vector<Eigen::Vector3d> rays;
   std::erase_if(landmarks, [&](const Landmark& lm) {
-    rays.clear();
-    for (const Observation& obs : lm.observations) {
-      rays.push_back((lm.point_in_submap - centres[obs.keyframe]).normalized());
-    }
-    for (std::size_t a = 0; a < rays.size(); ++a) {
-      for (std::size_t b = a + 1; b < rays.size(); ++b) {
-        if (rays[a].dot(rays[b]) <= min_cos) return false;  // wide enough
+    const std::vector<Observation>& obs = lm.observations;
+    for (std::size_t a = 0; a < obs.size(); ++a) {
+      for (std::size_t b = a + 1; b < obs.size(); ++b) {
+        const double angle =
+            TriangulationAngle(centres[obs[a].keyframe], centres[obs[b].keyframe], lm.point_in_submap);
+        if (angle >= min_angle) return false;  // wide enough
       }
     }
     return true;

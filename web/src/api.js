@@ -51,16 +51,21 @@ export class ApiError extends Error {
   }
 }
 
+// The server's JSON error body ({"error": {"code", "message"}}), or the status line when the
+// body is not one.
+function apiError(status, body) {
+  const err = body && body.error ? body.error : { code: 'error', message: `HTTP ${status}` };
+  return new ApiError(status, err.code, err.message);
+}
+
 async function errorFrom(response) {
-  let code = 'error';
-  let message = `HTTP ${response.status}`;
+  let body = null;
   try {
-    const body = await response.json();
-    if (body && body.error) ({ code, message } = body.error);
+    body = await response.json();
   } catch {
-    // not JSON: keep the status line
+    // not JSON: the status line is the message
   }
-  return new ApiError(response.status, code, message);
+  return apiError(response.status, body);
 }
 
 export async function apiFetch(url, init = {}) {
@@ -99,13 +104,8 @@ export function uploadVideo(file, options, onProgress) {
       if (e.lengthComputable && onProgress) onProgress(e.loaded / e.total);
     };
     xhr.onload = () => {
-      const body = xhr.response;
-      if (xhr.status === 201) {
-        resolve(body);
-      } else {
-        const err = body && body.error ? body.error : { code: 'error', message: `HTTP ${xhr.status}` };
-        reject(new ApiError(xhr.status, err.code, err.message));
-      }
+      if (xhr.status === 201) resolve(xhr.response);
+      else reject(apiError(xhr.status, xhr.response));
     };
     xhr.onerror = () => reject(new ApiError(0, 'network', 'network error during upload'));
     xhr.send(form);
