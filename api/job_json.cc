@@ -86,10 +86,16 @@ JobOptions ParseJobOptions(const json& j) {
       o.keyframes_per_submap = GetInt(value, "keyframes_per_submap");
     } else if (key == "max_image_size") {
       o.max_image_size = GetInt(value, "max_image_size");
+    } else if (key == "detect_every") {
+      o.detect_every = GetInt(value, "detect_every");
+      if (*o.detect_every < 0 || *o.detect_every > 1000) {
+        throw InputError(fmt::format("options.detect_every must be in [0, 1000] (0 = automatic), got {}",
+                                     *o.detect_every));
+      }
     } else {
       throw InputError(fmt::format(
           "options: unknown key \"{}\" (known: name, stride, focal, intrinsics, "
-          "keyframes_per_submap, max_image_size)",
+          "keyframes_per_submap, max_image_size, detect_every)",
           key));
     }
   }
@@ -120,6 +126,7 @@ json ToJson(const JobOptions& o) {
   }
   if (o.keyframes_per_submap) j["keyframes_per_submap"] = *o.keyframes_per_submap;
   if (o.max_image_size) j["max_image_size"] = *o.max_image_size;
+  if (o.detect_every) j["detect_every"] = *o.detect_every;
   return j;
 }
 
@@ -134,6 +141,7 @@ MappingOptions ToMappingOptions(const JobOptions& o) {
   }
   if (o.focal) m.focal_px = *o.focal;
   if (o.keyframes_per_submap) m.submap.keyframes_per_submap = *o.keyframes_per_submap;
+  if (o.detect_every) m.detection_interval = *o.detect_every;
   m.Check();
   return m;
 }

@@ -24,10 +24,11 @@ struct JobOptions {
   std::optional<Intrinsics> intrinsics;     // full calibration (intrinsics.json format)
   std::optional<int> keyframes_per_submap;  // submap size
   std::optional<int> max_image_size;        // processing long side (px), 0 = no downscale
+  std::optional<int> detect_every;          // SIFT on every N-th frame (1 = every frame, 0 = auto)
 };
 
 // Accepts an object with the keys name, stride, focal, intrinsics, keyframes_per_submap,
-// max_image_size (all optional). Throws InputError naming the key for unknown keys, wrong
+// max_image_size, detect_every (all optional). Throws InputError naming the key for unknown keys, wrong
 // types or out-of-range values (the resulting MappingOptions are Check()ed as well).
 JobOptions ParseJobOptions(const nlohmann::json& j);
 // Parses text as JSON first (InputError "options: malformed JSON ...").

@@ -147,6 +147,10 @@ void RegisterMapCommand(CLI::App& app) {
   cmd->add_option("--feature-workers", args->options.feature_workers,
                   "Frames whose SIFT features are extracted in parallel")
       ->capture_default_str();
+  cmd->add_option("--detect-every", args->options.detection_interval,
+                  "SIFT on every N-th frame, KLT optical flow in between; 1 = SIFT on every frame "
+                  "(the paper); 0 = automatic (one detection per 0.2 s of video, every photo of a folder)")
+      ->capture_default_str();
   cmd->add_option("--max-features", args->options.sift.max_features,
                   fmt::format("SIFT features per frame (image folders: {})", kPhotoFolderMaxFeatures))
       ->capture_default_str()

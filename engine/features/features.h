@@ -20,6 +20,10 @@ struct Features {
   // to: then every row has unit L2 norm).
   cv::Mat descriptors;
   std::vector<Rgb> colors;  // RGB sampled at each keypoint (for landmark colour)
+  // True when SIFT ran on this image; false when the keypoints were carried here from the last
+  // detection frame by optical flow (KltPropagator: positions new, descriptors and colours
+  // inherited, no features of newly visible ground). Keyframes prefer detected frames.
+  bool detected = true;
 
   size_t size() const { return keypoints.size(); }
   bool empty() const { return keypoints.empty(); }

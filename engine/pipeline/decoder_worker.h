@@ -1,7 +1,15 @@
 // The decoder side of a mapping run (docs/architecture.md, data flow): decodes frames and
-// extracts their SIFT features on its own thread(s), pushing them in input order into the
-// bounded queue thread 1 consumes. SIFT on every frame is the throughput bottleneck, so
-// frames are decoded in batches of `workers` and extracted in parallel.
+// gives each its features on its own thread(s), pushing them in input order into the bounded
+// queue thread 1 consumes.
+//
+// SIFT is the throughput bottleneck (~270 ms per 720p frame on one core). Two schedules:
+//  * detection_interval = 1 (the paper): SIFT on every frame, `workers` frames extracted in
+//    parallel.
+//  * detection_interval = N > 1: SIFT on every N-th frame only; the frames in between get the
+//    last detection frame's keypoints carried over by KLT (KltPropagator). SIFT of the next
+//    detection frame runs on a helper thread while KLT fills in the frames before it, so the
+//    two overlap on two cores. A frame whose KLT survivors fall below
+//    KltOptions::min_survival_fraction gets SIFT at once and becomes the new reference.
 #pragma once
 
 #include <atomic>
@@ -13,6 +21,7 @@
 #include "engine/core/bounded_queue.h"
 #include "engine/core/cancellation.h"
 #include "engine/features/features.h"
+#include "engine/features/klt_propagator.h"
 #include "engine/features/sift_extractor.h"
 #include "engine/video/frame_source.h"
 
@@ -24,11 +33,22 @@ struct FrameFeatures {
   Features features;
 };
 
+struct FeatureStageOptions {
+  SiftOptions sift;
+  KltOptions klt;
+  int workers = 2;             // threads extracting SIFT at the same time
+  int detection_interval = 1;  // SIFT on every N-th frame, KLT in between (1 = every frame)
+  // Frames with fewer features than this are counted as featureless (report warning).
+  std::size_t min_features = 0;
+
+  void Check() const;  // throws InputError
+};
+
 class DecoderWorker {
  public:
-  DecoderWorker(FrameSource& source, const SiftOptions& sift, int workers,
+  DecoderWorker(FrameSource& source, const FeatureStageOptions& options,
                 BoundedQueue<FrameFeatures>& queue, CancellationToken cancel,
-                const std::atomic<bool>& stop, std::size_t min_features);
+                const std::atomic<bool>& stop);
 
   // Runs until the input ends, `stop` is set, the token is cancelled or the queue is closed;
   // always closes the queue. Errors are kept for error(), not thrown.
@@ -37,20 +57,29 @@ class DecoderWorker {
   std::exception_ptr error() const { return error_; }
   double busy_seconds() const { return busy_seconds_; }
   std::int64_t frames() const { return frames_; }
+  std::int64_t frames_detected() const { return frames_detected_; }
   std::int64_t frames_without_features() const { return frames_without_features_; }
 
  private:
+  // Returns false when the consumer closed the queue or the run must stop.
+  bool RunDetectEveryFrame();
+  bool RunWithPropagation();
   std::vector<FrameFeatures> ExtractBatch(const std::vector<Frame>& batch);
+  FrameFeatures Detect(const Frame& frame, std::size_t extractor) const;
+  bool Emit(FrameFeatures item);
+  bool ShouldStop() const { return cancel_.IsCancelled() || stop_.load(); }
 
   FrameSource& source_;
+  FeatureStageOptions options_;
   std::vector<SiftExtractor> extractors_;
+  KltPropagator klt_;
   BoundedQueue<FrameFeatures>& queue_;
   CancellationToken cancel_;
   const std::atomic<bool>& stop_;
-  const std::size_t min_features_;
   std::exception_ptr error_;
   double busy_seconds_ = 0;
   std::int64_t frames_ = 0;
+  std::int64_t frames_detected_ = 0;
   std::int64_t frames_without_features_ = 0;
 };
 

@@ -182,8 +182,14 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   BoundedQueue<FrameFeatures> queue(options.queue_capacity);
   std::atomic<bool> stop{false};
   const int min_features = options.submap.min_tracking_inliers;
-  DecoderWorker worker(*source, options.sift, options.feature_workers, queue, cancel, stop,
-                       static_cast<std::size_t>(min_features));
+  FeatureStageOptions feature_stage;
+  feature_stage.sift = options.sift;
+  feature_stage.klt = options.klt;
+  feature_stage.workers = options.feature_workers;
+  feature_stage.detection_interval = options.EffectiveDetectionInterval(info.fps);
+  feature_stage.min_features = static_cast<std::size_t>(min_features);
+  report.detection_interval = feature_stage.detection_interval;
+  DecoderWorker worker(*source, feature_stage, queue, cancel, stop);
   std::thread decoder([&worker] { worker.Run(); });
 
   MappingProgress state;
@@ -300,6 +306,7 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   report.frames_posed = exported.frames_posed;
   report.frames_unposed = std::max<std::int64_t>(0, report.frames_decoded - report.frames_posed);
   report.frames_without_features = worker.frames_without_features();
+  report.frames_detected = worker.frames_detected();
   report.keyframes = stats.keyframes;
   report.submaps = static_cast<std::int64_t>(snapshot->submaps.size());
   report.submaps_discarded = stats.submaps_discarded;

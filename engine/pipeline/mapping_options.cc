@@ -1,6 +1,7 @@
 #include "engine/pipeline/mapping_options.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include <fmt/format.h>
 
@@ -20,6 +21,14 @@ void MappingOptions::Check() const {
   CheckGreater("MappingOptions.queue_capacity", queue_capacity, std::size_t{0});
   CheckGreater("MappingOptions.alignment_queue_capacity", alignment_queue_capacity, std::size_t{0});
   CheckInRange("MappingOptions.feature_workers", feature_workers, 1, 16);
+  CheckInRange("MappingOptions.detection_interval", detection_interval, 0, 1000);
+  klt.Check();
+}
+
+int MappingOptions::EffectiveDetectionInterval(double fps) const {
+  if (detection_interval > 0) return detection_interval;
+  const double frames_per_second = fps > 0 ? fps / source.stride : 1.0;
+  return std::max(1, static_cast<int>(std::lround(frames_per_second * kAutoDetectionSeconds)));
 }
 
 Intrinsics ResolveIntrinsics(const MappingOptions& options, const FrameSourceInfo& info) {

@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "engine/core/camera.h"
+#include "engine/features/klt_propagator.h"
 #include "engine/features/sift_extractor.h"
 #include <filesystem>
 
@@ -41,13 +42,26 @@ struct MappingOptions {
   // on every frame is the cost that bounds throughput (~270 ms per 720p frame on one core),
   // so on 2 cores two workers nearly double the frame rate; the submap builder needs ~10 %.
   int feature_workers = 2;
+  // SIFT on every N-th frame, KLT optical flow in between (engine/features/klt_propagator.h).
+  // 1 = SIFT on every frame, as in the paper. 0 = automatic: one detection per
+  // kAutoDetectionSeconds of input (every 6th frame at 30 fps, every frame of a photo folder,
+  // whose fps is 1), taking the stride into account.
+  int detection_interval = 0;
+  KltOptions klt;
   // Continue an interrupted run in the same out_dir: submaps already persisted there are
   // reloaded and decoding restarts at the first frame the next submap needs, instead of
   // mapping the whole input again (a server restart after a crash uses this).
   bool resume = false;
 
   void Check() const;  // throws InputError
+
+  // detection_interval resolved for an input of `fps` frames per second (before stride).
+  int EffectiveDetectionInterval(double fps) const;
 };
+
+// Time between SIFT detections under detection_interval = 0: at 30 fps KLT then bridges 5
+// frames (~0.17 s), short enough for the ground to shift by a fraction of the image only.
+inline constexpr double kAutoDetectionSeconds = 0.2;
 
 // Intrinsics at processing size for `info`: the given calibration or focal rescaled by
 // info.scale (pixel centres at integer coordinates: c' = (c + 0.5) s - 0.5), or the default

@@ -74,6 +74,8 @@ nlohmann::json MappingReport::ToJson() const {
           {"frames_posed", frames_posed},
           {"frames_unposed", frames_unposed},
           {"frames_without_features", frames_without_features},
+          {"frames_detected", frames_detected},
+          {"detection_interval", detection_interval},
           {"keyframes", keyframes},
           {"submaps", submaps},
           {"submaps_discarded", submaps_discarded},

@@ -13,7 +13,7 @@
 namespace glam {
 
 struct MappingTimings {
-  double decode_and_features_s = 0;  // decoder thread busy time (decode + SIFT)
+  double decode_and_features_s = 0;  // decoder thread busy time (decode + SIFT + KLT)
   double builder_s = 0;              // submap builder time, including BA
   double bundle_adjust_s = 0;        // of which bundle adjustment
   double alignment_s = 0;            // thread 2 busy time (retrieval, verification, graph)
@@ -31,6 +31,8 @@ struct MappingReport {
   // Frames with fewer SIFT features than tracking needs (SubmapOptions::min_tracking_inliers):
   // black, uniform, overexposed or badly blurred frames, which can never be posed.
   std::int64_t frames_without_features = 0;
+  std::int64_t frames_detected = 0;  // frames that got SIFT (the others: KLT propagation)
+  int detection_interval = 1;        // SIFT on every N-th frame (MappingOptions)
   std::int64_t keyframes = 0;
   std::int64_t submaps = 0;
   std::int64_t submaps_discarded = 0;

@@ -44,6 +44,10 @@ struct FrameRecord {
   std::int64_t index = 0;
   double timestamp_s = 0;
   CompactFeatures features;
+  // SIFT ran on this frame (Features::detected); false for frames whose keypoints KLT carried
+  // over from a detection frame. Keyframes are taken on detected frames where possible: they
+  // alone see newly visible ground.
+  bool detected = true;
   std::optional<SE3> cam_from_submap;  // set when tracking posed the frame
   // (feature index, landmark id) of the PnP inliers.
   std::vector<std::pair<int, std::uint32_t>> landmark_matches;

@@ -41,17 +41,21 @@ void SubmapBuilder::AddKeyframe(std::size_t position) {
 void SubmapBuilder::InsertKeyframes(std::size_t current_position) {
   const std::size_t previous = open_.keyframe_frame_positions.back();
   if (current_position <= previous) return;
-  // Middle keyframe: the posed frame closest to halfway.
-  std::optional<std::size_t> middle;
+  // Middle keyframe: the posed frame closest to halfway; a detected frame (full SIFT
+  // features) within a quarter of the gap from halfway is preferred to a propagated one.
   const std::size_t half = (previous + current_position) / 2;
-  for (std::size_t d = 0; d <= current_position - previous && !middle; ++d) {
-    for (std::size_t p : {half - std::min(d, half), half + d}) {
-      if (p > previous && p < current_position && open_.frames[p].cam_from_submap) {
-        middle = p;
-        break;
+  const std::size_t gap = current_position - previous;
+  auto closest_to_half = [&](std::size_t max_distance, bool detected_only) -> std::optional<std::size_t> {
+    for (std::size_t d = 0; d <= max_distance; ++d) {
+      for (std::size_t p : {half - std::min(d, half), half + d}) {
+        const FrameRecord& f = open_.frames[p];
+        if (p > previous && p < current_position && f.cam_from_submap && (f.detected || !detected_only)) return p;
       }
     }
-  }
+    return std::nullopt;
+  };
+  std::optional<std::size_t> middle = closest_to_half(gap / 4, true);
+  if (!middle) middle = closest_to_half(gap, false);
   const std::size_t first_new = open_.landmarks.size();
   if (middle) {
     AddKeyframe(*middle);

@@ -7,6 +7,13 @@
 #include "engine/core/logging.h"
 
 namespace glam {
+namespace {
+
+// How far (frames) the overlap start may move back to reach a detected frame: more than any
+// automatic detection interval (0.2 s at up to 120 fps).
+constexpr std::size_t kMaxOverlapShift = 30;
+
+}  // namespace
 
 SubmapBuilder::SubmapBuilder(const Intrinsics& intrinsics, const SubmapOptions& options,
                              CancellationToken cancel)
@@ -51,6 +58,7 @@ std::vector<Submap> SubmapBuilder::AddFrame(std::int64_t index, double timestamp
   record.index = index;
   record.timestamp_s = timestamp_s;
   record.features = CompactFeatures::From(features);
+  record.detected = features.detected;
   std::vector<Submap> completed;
   Process(std::move(record), &completed);
   return completed;
@@ -67,8 +75,12 @@ void SubmapBuilder::StartSubmapAt(std::deque<FrameRecord> frames) {
 
 void SubmapBuilder::Process(FrameRecord record, std::vector<Submap>* completed) {
   if (!open_.bootstrapped) {
+    // The second keyframe is looked for among detected frames only (propagated frames carry a
+    // subset of a detection frame's keypoints); the frames in between are localised once the
+    // bootstrap succeeds.
+    const bool detected = record.detected;
     open_.frames.push_back(std::move(record));
-    TryBootstrap();
+    if (detected || open_.frames.size() == 1) TryBootstrap();
     return;
   }
   open_.frames.push_back(std::move(record));
@@ -92,12 +104,14 @@ void SubmapBuilder::Process(FrameRecord record, std::vector<Submap>* completed) 
   const int inliers = static_cast<int>(current.landmark_matches.size());
   GLAM_LOG_TRACE("frame {}: {} PnP inliers of {} landmarks (tau_resection {})", current.index, inliers,
                  open_.landmarks.size(), open_.tau_resection);
-  // Paper rule: a new keyframe when inliers fall below tau_resection. Added guard: not before
+  // Paper rule: a new keyframe when inliers fall below tau_resection. Added guards: not before
   // the parallax to the previous keyframe allows triangulating between the middle keyframe
-  // and this frame, unless tracking is about to be lost.
+  // and this frame, and on a detected frame (the next one is at most detection_interval
+  // frames away) — unless tracking is about to be lost.
+  const bool about_to_lose = inliers < 2 * options_.min_tracking_inliers;
   if (inliers < open_.tau_resection &&
-      (ParallaxToLastKeyframeDeg(current) >= 2.0 * options_.min_triangulation_angle_deg ||
-       inliers < 2 * options_.min_tracking_inliers)) {
+      ((current.detected && ParallaxToLastKeyframeDeg(current) >= 2.0 * options_.min_triangulation_angle_deg) ||
+       about_to_lose)) {
     InsertKeyframes(open_.frames.size() - 1);
   }
 
@@ -177,8 +191,16 @@ void SubmapBuilder::HandOffOverlap(std::vector<Submap>* completed) {
   const std::size_t n = open_.frames.size();
   const std::size_t overlap =
       std::max<std::size_t>(2, static_cast<std::size_t>(std::ceil(options_.overlap_fraction * n)));
-  std::deque<FrameRecord> replay(open_.frames.end() - static_cast<std::ptrdiff_t>(std::min(overlap, n)),
-                                 open_.frames.end());
+  // The next submap's first keyframe should have full SIFT features: the overlap start moves
+  // back to the nearest detected frame (at most one detection interval; the overlap grows).
+  std::size_t first_position = n - std::min(overlap, n);
+  for (std::size_t p = first_position + 1; p-- > 0 && first_position - p < kMaxOverlapShift;) {
+    if (open_.frames[p].detected) {
+      first_position = p;
+      break;
+    }
+  }
+  std::deque<FrameRecord> replay(open_.frames.begin() + static_cast<std::ptrdiff_t>(first_position), open_.frames.end());
   completed->push_back(Complete());
   // The next submap bootstraps from the overlap's first frame and re-tracks the rest.
   FrameRecord first = std::move(replay.front());

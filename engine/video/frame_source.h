@@ -57,7 +57,8 @@ class FrameSource {
   virtual const FrameSourceInfo& info() const = 0;
 
   // The next Next() returns the frame with this input index (then index + stride, ...).
-  // Throws InputError if the index is beyond the known end of the input.
+  // Seeking to the end (index == frame count) is allowed: Next() then returns nullopt (a run
+  // interrupted after its last submap resumes there). Throws InputError beyond the end.
   virtual void SeekTo(int64_t index) = 0;
 
   // Number of frames delivered by Next() so far.

@@ -130,7 +130,7 @@ std::optional<Frame> ImageFolderSource::Next() {
 }
 
 void ImageFolderSource::SeekTo(int64_t index) {
-  if (index < 0 || index >= static_cast<int64_t>(files_.size())) {
+  if (index < 0 || index > static_cast<int64_t>(files_.size())) {  // == size: at the end
     throw InputError(
         fmt::format("cannot seek to image {} of a folder with {} images", index, files_.size()));
   }

@@ -110,12 +110,13 @@ std::optional<Frame> VideoFileSource::Next() {
 }
 
 void VideoFileSource::SeekTo(int64_t index) {
-  if (index < 0 || (info_.frame_count > 0 && index >= info_.frame_count)) {
+  if (index < 0 || (info_.frame_count > 0 && index > info_.frame_count)) {
     throw InputError(fmt::format("cannot seek to frame {} of '{}' ({} frames)", index,
                                  path_.string(), info_.frame_count));
   }
-  done_ = false;
   next_index_ = index;
+  done_ = info_.frame_count > 0 && index == info_.frame_count;  // at the end: nothing left
+  if (done_) return;
   const bool first_pending = (position_ == 1 && !first_frame_.empty());
   if (first_pending && index == 0) return;
   if (index >= position_ && index - position_ <= kMaxGrabSeek) return;  // grab forward

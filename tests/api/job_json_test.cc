@@ -11,7 +11,7 @@ using nlohmann::json;
 
 TEST(JobJson, ParsesOptionsAndMapsThemToEngineOptions) {
   const JobOptions o = ParseJobOptionsText(R"({"name": "flight 1", "stride": 2, "focal": 900.5,
-      "keyframes_per_submap": 8,
+      "keyframes_per_submap": 8, "detect_every": 1,
       "intrinsics": {"model": "pinhole", "width": 640, "height": 360, "fx": 500, "fy": 501,
                      "cx": 319.5, "cy": 179.5}})");
   EXPECT_EQ(o.name, "flight 1");
@@ -22,6 +22,8 @@ TEST(JobJson, ParsesOptionsAndMapsThemToEngineOptions) {
   const MappingOptions m = ToMappingOptions(o);
   EXPECT_EQ(m.source.stride, 2);
   EXPECT_EQ(m.submap.keyframes_per_submap, 8);
+  EXPECT_EQ(m.detection_interval, 1);
+  EXPECT_EQ(ToMappingOptions(JobOptions{}).detection_interval, 0);  // automatic by default
   ASSERT_TRUE(m.intrinsics.has_value());
   EXPECT_DOUBLE_EQ(m.intrinsics->cx, 319.5);
   // Round trip through the stored JSON.
@@ -44,6 +46,7 @@ TEST(JobJson, RejectsBadOptionsWithTheKeyInTheMessage) {
   EXPECT_NE(message(R"({"stride": "2"})").find("stride"), std::string::npos);
   EXPECT_NE(message(R"({"stride": 0})").find("stride"), std::string::npos);
   EXPECT_NE(message(R"({"focal": -5})").find("focal"), std::string::npos);
+  EXPECT_NE(message(R"({"detect_every": -1})").find("detect_every"), std::string::npos);
   EXPECT_NE(message(R"({"intrinsics": {"model": "pinhole"}})").find("width"), std::string::npos);
   EXPECT_EQ(message("{}"), "accepted");
 }

@@ -62,7 +62,9 @@ TEST_F(ImageFolderSourceTest, StrideSeekAndDownscale) {
   EXPECT_EQ(decoded, (std::vector<int>{0, 2, 4, 6}));
   source->SeekTo(5);
   EXPECT_EQ(DecodeIndex(source->Next()->bgr, 10), 5);
-  EXPECT_THROW(source->SeekTo(7), InputError);
+  source->SeekTo(7);  // the end: nothing left
+  EXPECT_FALSE(source->Next().has_value());
+  EXPECT_THROW(source->SeekTo(8), InputError);
 }
 
 TEST_F(ImageFolderSourceTest, SkipsUndecodableAndMismatchedImages) {

@@ -1,0 +1,83 @@
+// Carries the SIFT features of one *detection* frame into the frames that follow it with
+// pyramidal Lucas-Kanade optical flow (cv::calcOpticalFlowPyrLK), so that SIFT — the most
+// expensive step of mapping (~270 ms per 720p frame on one core) — runs on every N-th frame
+// only, while every frame still gets features for tracking.
+//
+// A propagated frame's features are the detection frame's keypoints that KLT found again, at
+// their new positions, each with the detection frame's descriptor and colour. The submap
+// builder therefore needs no second code path: its descriptor matching simply finds the same
+// descriptor again (its keypoint moved), and triangulation between a detection frame and a
+// propagated frame pairs exactly the keypoints that KLT followed.
+//
+// Every frame is tracked from the detection frame itself (not from the previous frame), with
+// the previous frame's result as the initial guess: positions do not accumulate drift along
+// the chain, and a point lost once is not picked up again by a neighbour's patch.
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "engine/features/features.h"
+
+namespace glam {
+
+struct KltOptions {
+  // Lucas-Kanade window (pixels, odd) and pyramid levels above the base: 15 x 15 with 3
+  // levels follows ~40 px of motion between the detection frame and a frame N later.
+  int window_px = 15;
+  int pyramid_levels = 3;
+  int max_iterations = 20;
+  double epsilon_px = 0.03;
+  // Track rejected when the mean absolute intensity difference of the matched windows (grey
+  // levels, 0-255) exceeds this. Only a coarse guard: the error of a wrong track depends on the
+  // image's contrast (on smooth low-contrast ground a wrong window differs by < 10 grey levels).
+  double max_patch_error = 30.0;
+  // Minimum eigenvalue of the window's spatial gradient matrix (OpenCV's minEigThreshold,
+  // normalised by the window area): textureless windows cannot be located.
+  double min_eigen_value = 1e-4;
+  // Tracked positions closer than this to the image border are dropped (the window would
+  // leave the image).
+  double border_px = 2.0;
+  // Forward-backward check: every point is tracked back to the detection frame and dropped if
+  // it does not return within this distance (pixels). It doubles the cost of KLT but is the
+  // contrast-independent test of a wrong track (a texture that replaced the tracked ground
+  // kept 600 of 800 tracks under the patch-error test alone, 28 with this check).
+  // 0 = off.
+  double max_forward_backward_px = 1.0;
+  // Used by the feature stage (DecoderWorker): when fewer than this fraction of the detection
+  // frame's keypoints are still tracked (fast motion, a cut, ground leaving the view), the
+  // frame gets SIFT itself and becomes the new reference instead of waiting for the next
+  // scheduled detection.
+  double min_survival_fraction = 0.5;
+
+  void Check() const;  // throws InputError
+};
+
+class KltPropagator {
+ public:
+  explicit KltPropagator(const KltOptions& options = {});
+
+  // Makes `features`, detected on `gray` (8-bit, one channel), the reference that later
+  // frames are tracked from.
+  void SetReference(const cv::Mat& gray, const Features& features);
+
+  // Features of `gray` (the next frame, same size as the reference): the reference keypoints
+  // KLT still finds, with Features::detected = false. Points once lost stay lost until the next
+  // SetReference.
+  Features Propagate(const cv::Mat& gray);
+
+  bool has_reference() const { return !reference_pyramid_.empty(); }
+  std::size_t reference_size() const { return reference_.size(); }
+
+ private:
+  KltOptions options_;
+  cv::Size window_;
+  std::vector<cv::Mat> reference_pyramid_;
+  Features reference_;
+  std::vector<int> alive_;                 // reference indices still tracked
+  std::vector<cv::Point2f> last_position_;  // their positions in the last propagated frame
+};
+
+}  // namespace glam

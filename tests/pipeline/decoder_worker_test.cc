@@ -1,0 +1,144 @@
+// The feature stage's schedule: SIFT on every N-th frame, KLT in between, frames in input
+// order with either worker count, an early detection when most tracks are lost, and errors
+// and cancellation that leave no thread behind.
+#include "engine/pipeline/decoder_worker.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <thread>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include "engine/core/error.h"
+#include "tests/features/synthetic_texture.h"
+
+namespace glam {
+namespace {
+
+// Frames of a texture panning right by 2 px per frame; frame `cut` (if any) shows unrelated
+// ground from then on.
+class PanningSource : public FrameSource {
+ public:
+  PanningSource(int frames, int cut = -1) : frames_(frames), cut_(cut) {
+    info_.fps = 30;
+    info_.frame_count = frames;
+    info_.original_size = info_.processing_size = {320, 240};
+  }
+  std::optional<Frame> Next() override {
+    if (next_ >= frames_) return std::nullopt;
+    const cv::Mat& texture = (cut_ >= 0 && next_ >= cut_) ? other_ : base_;
+    Frame f;
+    f.index = next_;
+    f.timestamp_s = next_ / 30.0;
+    f.bgr = texture(cv::Rect(std::min(2 * next_, 80), 0, 320, 240)).clone();  // 40 frames of pan
+    f.original_size = f.bgr.size();
+    ++next_;
+    return f;
+  }
+  const FrameSourceInfo& info() const override { return info_; }
+  void SeekTo(int64_t index) override { next_ = index; }
+  int64_t frames_delivered() const override { return next_; }
+  bool ended_early() const override { return false; }
+
+ private:
+  int frames_, cut_;
+  int next_ = 0;
+  cv::Mat base_ = testing::RandomTexture({400, 240}, 5);
+  cv::Mat other_ = testing::RandomTexture({400, 240}, 6);
+  FrameSourceInfo info_;
+};
+
+std::vector<FrameFeatures> RunWorker(FrameSource& source, const FeatureStageOptions& options) {
+  BoundedQueue<FrameFeatures> queue(4);
+  std::atomic<bool> stop{false};
+  DecoderWorker worker(source, options, queue, {}, stop);
+  std::thread t([&] { worker.Run(); });
+  std::vector<FrameFeatures> items;
+  while (std::optional<FrameFeatures> item = queue.Pop()) items.push_back(std::move(*item));
+  t.join();
+  if (worker.error()) std::rethrow_exception(worker.error());
+  EXPECT_EQ(worker.frames(), static_cast<std::int64_t>(items.size()));
+  return items;
+}
+
+FeatureStageOptions Options(int interval, int workers) {
+  FeatureStageOptions o;
+  o.sift.max_features = 500;
+  o.detection_interval = interval;
+  o.workers = workers;
+  return o;
+}
+
+TEST(DecoderWorker, DetectsEveryNthFrameAndPropagatesTheRestInOrder) {
+  for (int workers : {1, 2}) {
+    PanningSource source(23);
+    const std::vector<FrameFeatures> items = RunWorker(source, Options(5, workers));
+    ASSERT_EQ(items.size(), 23u) << workers << " workers";
+    for (std::size_t i = 0; i < items.size(); ++i) {
+      EXPECT_EQ(items[i].index, static_cast<std::int64_t>(i));
+      // Frames 0, 5, 10, 15, 20 are detected; 21 and 22 (end of input) are propagated.
+      EXPECT_EQ(items[i].features.detected, i % 5 == 0) << "frame " << i;
+      EXPECT_GT(items[i].features.size(), 200u);
+    }
+    // A propagated frame's keypoints are its detection frame's, moved by the pan (-2 px/frame).
+    const Features& det = items[10].features;
+    const Features& prop = items[13].features;
+    int checked = 0;
+    for (std::size_t i = 0; i < prop.size(); ++i) {
+      for (std::size_t j = 0; j < det.size(); ++j) {
+        if (cv::norm(det.descriptors.row(static_cast<int>(j)), prop.descriptors.row(static_cast<int>(i)),
+                     cv::NORM_INF) == 0) {
+          const double error = std::hypot(prop.keypoints[i].pt.x - (det.keypoints[j].pt.x - 6.0),
+                                          prop.keypoints[i].pt.y - det.keypoints[j].pt.y);
+          checked += error < 0.25 ? 1 : 0;
+          break;
+        }
+      }
+    }
+    EXPECT_GT(checked, static_cast<int>(prop.size()) * 9 / 10);
+  }
+}
+
+TEST(DecoderWorker, IntervalOneIsSiftOnEveryFrame) {
+  PanningSource source(7);
+  const std::vector<FrameFeatures> items = RunWorker(source, Options(1, 2));
+  ASSERT_EQ(items.size(), 7u);
+  for (const FrameFeatures& item : items) EXPECT_TRUE(item.features.detected);
+}
+
+TEST(DecoderWorker, DetectsAtOnceWhenTheGroundChanges) {
+  PanningSource source(12, /*cut=*/3);
+  const std::vector<FrameFeatures> items = RunWorker(source, Options(8, 2));
+  ASSERT_EQ(items.size(), 12u);
+  EXPECT_TRUE(items[0].features.detected);
+  EXPECT_FALSE(items[2].features.detected);
+  EXPECT_TRUE(items[3].features.detected);  // the cut: KLT lost nearly everything
+  EXPECT_FALSE(items[4].features.detected); // then propagated from frame 3
+  EXPECT_GT(items[4].features.size(), items[3].features.size() * 8 / 10);
+  EXPECT_TRUE(items[8].features.detected);  // the scheduled detection
+}
+
+TEST(DecoderWorker, StopsWhenTheConsumerClosesTheQueue) {
+  PanningSource source(200);
+  BoundedQueue<FrameFeatures> queue(2);
+  std::atomic<bool> stop{false};
+  DecoderWorker worker(source, Options(4, 2), queue, {}, stop);
+  std::thread t([&] { worker.Run(); });
+  ASSERT_TRUE(queue.Pop().has_value());
+  queue.Close();
+  t.join();  // returns: no thread is left blocked on the closed queue
+  EXPECT_LT(worker.frames(), 200);
+  EXPECT_FALSE(worker.error());
+}
+
+TEST(DecoderWorker, OptionsAreChecked) {
+  FeatureStageOptions o = Options(0, 2);
+  EXPECT_THROW(o.Check(), InputError);
+  o = Options(3, 0);
+  EXPECT_THROW(o.Check(), InputError);
+}
+
+}  // namespace
+}  // namespace glam
