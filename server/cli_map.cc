@@ -151,6 +151,11 @@ void RegisterMapCommand(CLI::App& app) {
                   "SIFT on every N-th frame, KLT optical flow in between; 1 = SIFT on every frame "
                   "(the paper); 0 = automatic (one detection per 0.2 s of video, every photo of a folder)")
       ->capture_default_str();
+  cmd->add_option("--klt-window", args->options.klt.window_px,
+                  "KLT window size in pixels (odd) for the frames between detections")
+      ->capture_default_str();
+  cmd->add_option("--klt-levels", args->options.klt.pyramid_levels, "KLT pyramid levels above the image")
+      ->capture_default_str();
   cmd->add_option("--max-features", args->options.sift.max_features,
                   fmt::format("SIFT features per frame (image folders: {})", kPhotoFolderMaxFeatures))
       ->capture_default_str()
