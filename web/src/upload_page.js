@@ -32,7 +32,7 @@ async function collectOptions(form) {
     options.focal = f;
   }
   if (intrinsicsFile) options.intrinsics = await readIntrinsics(intrinsicsFile);
-  for (const [key, min] of [['stride', 1], ['keyframes_per_submap', 3], ['max_image_size', 0]]) {
+  for (const [key, min] of [['stride', 1], ['keyframes_per_submap', 3], ['max_image_size', 0], ['detect_every', 0]]) {
     const text = form.elements[key].value.trim();
     if (!text) continue;
     const n = Number(text);
