@@ -48,8 +48,9 @@ void SubmapBuilder::InsertKeyframes(std::size_t current_position) {
   auto closest_to_half = [&](std::size_t max_distance, bool detected_only) -> std::optional<std::size_t> {
     for (std::size_t d = 0; d <= max_distance; ++d) {
       for (std::size_t p : {half - std::min(d, half), half + d}) {
+        if (p <= previous || p >= current_position) continue;
         const FrameRecord& f = open_.frames[p];
-        if (p > previous && p < current_position && f.cam_from_submap && (f.detected || !detected_only)) return p;
+        if (f.cam_from_submap && (f.detected || !detected_only)) return p;
       }
     }
     return std::nullopt;
