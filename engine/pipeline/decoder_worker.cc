@@ -71,7 +71,7 @@ FrameFeatures DecoderWorker::Detect(const Frame& frame, std::size_t extractor) c
   return {frame.index, frame.timestamp_s, extractors_[extractor].Extract(frame.bgr)};
 }
 
-bool DecoderWorker::RunDetectEveryFrame() {
+void DecoderWorker::RunDetectEveryFrame() {
   while (!ShouldStop()) {
     const auto start = Clock::now();
     std::vector<Frame> batch;
@@ -87,11 +87,10 @@ bool DecoderWorker::RunDetectEveryFrame() {
     std::vector<FrameFeatures> items = ExtractBatch(batch);
     busy_seconds_ += Seconds(start);
     for (FrameFeatures& item : items) {
-      if (!Emit(std::move(item))) return false;
+      if (!Emit(std::move(item))) return;
     }
-    if (!more) return true;
+    if (!more) return;
   }
-  return false;
 }
 
 // Frame i goes to extractor i; all but the first on helper threads. Joins every thread
@@ -119,14 +118,14 @@ std::vector<FrameFeatures> DecoderWorker::ExtractBatch(const std::vector<Frame>&
 // One step: the reference (a detection frame) has been emitted; read the next N frames, start
 // SIFT on the last of them (the next detection frame) on a helper thread, propagate the others
 // from the reference meanwhile, then emit the detection frame and make it the reference.
-bool DecoderWorker::RunWithPropagation() {
+void DecoderWorker::RunWithPropagation() {
   const auto first_start = Clock::now();
   std::optional<Frame> first = source_.Next();
-  if (!first) return true;
+  if (!first) return;
   FrameFeatures reference = Detect(*first, 0);
   klt_.SetReference(Gray(first->bgr), reference.features);
   busy_seconds_ += Seconds(first_start);
-  if (!Emit(std::move(reference))) return false;
+  if (!Emit(std::move(reference))) return;
 
   const auto interval = static_cast<std::size_t>(options_.detection_interval);
   while (!ShouldStop()) {
@@ -137,7 +136,7 @@ bool DecoderWorker::RunWithPropagation() {
       if (!frame) break;
       frames.push_back(std::move(*frame));
     }
-    if (frames.empty()) return true;
+    if (frames.empty()) return;
     // At the end of input the last frame is propagated like the others (no detection frame).
     const bool detect_last = frames.size() == interval;
     const std::size_t propagated = detect_last ? frames.size() - 1 : frames.size();
@@ -177,15 +176,14 @@ bool DecoderWorker::RunWithPropagation() {
     }
     if (helper.joinable()) helper.join();
     if (propagation_error) std::rethrow_exception(propagation_error);
-    if (!open) return false;
+    if (!open) return;
     if (detect_last && extractors_.size() == 1 && !detection_error) detect_last_frame();
     if (detection_error) std::rethrow_exception(detection_error);
     if (detection) klt_.SetReference(Gray(frames.back().bgr), detection->features);
     busy_seconds_ += Seconds(start);
-    if (detection && !Emit(std::move(*detection))) return false;
-    if (!detect_last) return true;
+    if (detection && !Emit(std::move(*detection))) return;
+    if (!detect_last) return;
   }
-  return false;
 }
 
 }  // namespace glam

@@ -61,9 +61,9 @@ class DecoderWorker {
   std::int64_t frames_without_features() const { return frames_without_features_; }
 
  private:
-  // Returns false when the consumer closed the queue or the run must stop.
-  bool RunDetectEveryFrame();
-  bool RunWithPropagation();
+  // Both return when the input ends, the consumer closed the queue or the run must stop.
+  void RunDetectEveryFrame();
+  void RunWithPropagation();
   std::vector<FrameFeatures> ExtractBatch(const std::vector<Frame>& batch);
   FrameFeatures Detect(const Frame& frame, std::size_t extractor) const;
   bool Emit(FrameFeatures item);
