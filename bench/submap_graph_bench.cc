@@ -12,12 +12,14 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <numbers>
 #include <random>
+#include <set>
 #include <vector>
 
 #include "engine/alignment/submap_graph.h"
@@ -103,14 +105,23 @@ Chain MakeChain(int n) {
 
 double DepthUnits(const Sim3& world_from_submap) { return kAltitude / world_from_submap.scale(); }
 
-void AddSubmapAndEdges(const Chain& c, int i, SubmapGraph* graph) {
+void AddSubmapAndEdges(const Chain& c, int i, SubmapGraph* graph, bool temporal_only = false) {
   // Placed like the aligner does: from the current estimate of the temporal neighbour.
   const Sim3 initial = i == 0 ? c.initial[0]
                               : graph->world_from_submap(i - 1) * c.initial[i - 1].Inverse() *
                                     c.initial[i];
   graph->AddSubmap(static_cast<std::uint32_t>(i), initial, DepthUnits(c.truth[i]));
-  for (const Edge& e : c.edges_of[i]) graph->AddEdge(e.a, e.b, e.matches);
+  for (const Edge& e : c.edges_of[i]) {
+    if (temporal_only && e.b != e.a + 1) continue;
+    graph->AddEdge(e.a, e.b, e.matches);
+  }
 }
+
+// How the N-th submap is added: as the chain has it (temporal + loop edge), or with only its
+// temporal edge, solved over the whole graph or over the aligner's local window
+// (AlignerOptions::local_window, SubmapGraph::OptimizeSubset).
+enum class Mode { kChain, kTemporalWhole, kTemporalWindow };
+constexpr int kWindow = 8;
 
 struct Result {
   double seconds = 0;        // add + optimise of the N-th submap, wall clock
@@ -137,7 +148,7 @@ long PeakRssKb() {
   return usage.ru_maxrss;
 }
 
-Result Run(const Chain& chain, GraphLinearSolver solver, int n) {
+Result Run(const Chain& chain, GraphLinearSolver solver, int n, Mode mode) {
   using Clock = std::chrono::steady_clock;
   Result r;
   r.baseline_rss_kb = PeakRssKb();
@@ -151,8 +162,10 @@ Result Run(const Chain& chain, GraphLinearSolver solver, int n) {
 
   const auto start = Clock::now();
   const double cpu_start = CpuSeconds();
-  AddSubmapAndEdges(chain, n - 1, &graph);
-  const GraphSolveSummary summary = graph.Optimize();
+  AddSubmapAndEdges(chain, n - 1, &graph, mode != Mode::kChain);
+  std::set<std::uint32_t> window;
+  for (int i = std::max(0, n - kWindow); i < n; ++i) window.insert(static_cast<std::uint32_t>(i));
+  const GraphSolveSummary summary = mode == Mode::kTemporalWindow ? graph.OptimizeSubset(window) : graph.Optimize();
   r.seconds = std::chrono::duration<double>(Clock::now() - start).count();
   r.cpu_seconds = CpuSeconds() - cpu_start;
   r.iterations = summary.iterations;
@@ -164,7 +177,7 @@ Result Run(const Chain& chain, GraphLinearSolver solver, int n) {
 }
 
 // Runs `Run` in a child process so that every row's peak RSS is its own.
-bool RunIsolated(const Chain& chain, GraphLinearSolver solver, int n, Result* out) {
+bool RunIsolated(const Chain& chain, GraphLinearSolver solver, int n, Mode mode, Result* out) {
   int fds[2];
   if (pipe(fds) != 0) return false;
   std::fflush(stdout);
@@ -172,7 +185,7 @@ bool RunIsolated(const Chain& chain, GraphLinearSolver solver, int n, Result* ou
   if (pid < 0) return false;
   if (pid == 0) {
     close(fds[0]);
-    const Result r = Run(chain, solver, n);
+    const Result r = Run(chain, solver, n, mode);
     const ssize_t written = write(fds[1], &r, sizeof(r));
     _exit(written == static_cast<ssize_t>(sizeof(r)) ? 0 : 1);
   }
@@ -212,7 +225,7 @@ int main(int argc, char** argv) {
   for (GraphLinearSolver solver : solvers) {
     for (int n : sizes) {
       Result r;
-      if (!RunIsolated(chain, solver, n, &r)) {
+      if (!RunIsolated(chain, solver, n, Mode::kChain, &r)) {
         std::printf("| %s | %d | failed | | | | | | |\n", std::string(ToString(solver)).c_str(), n);
         continue;
       }
@@ -221,6 +234,23 @@ int main(int argc, char** argv) {
                   r.iterations, r.usable ? "" : " (not usable)", r.cpu_seconds, r.seconds,
                   r.warm_seconds,
                   static_cast<double>(r.peak_rss_kb) / 1024.0);
+      std::fflush(stdout);
+    }
+  }
+  // The aligner's usual case on a long flight: the new submap links only to its temporal
+  // neighbour. Whole-graph solve against the local window (default solver).
+  std::printf("\nN-th submap with only its temporal edge (sparse_schur): whole graph vs local window of %d\n\n", kWindow);
+  std::printf("| solve | N | iterations | add + optimise, CPU (s) | wall (s) |\n|---|---|---|---|---|\n");
+  for (int n : sizes) {
+    for (Mode mode : {Mode::kTemporalWhole, Mode::kTemporalWindow}) {
+      Result r;
+      const char* name = mode == Mode::kTemporalWhole ? "whole graph" : "local window";
+      if (!RunIsolated(chain, GraphLinearSolver::kSparseSchur, n, mode, &r)) {
+        std::printf("| %s | %d | failed | | |\n", name, n);
+        continue;
+      }
+      std::printf("| %s | %d | %d%s | %.3f | %.3f |\n", name, n, r.iterations, r.usable ? "" : " (not usable)",
+                  r.cpu_seconds, r.seconds);
       std::fflush(stdout);
     }
   }

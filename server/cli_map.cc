@@ -144,6 +144,10 @@ void RegisterMapCommand(CLI::App& app) {
   cmd->add_option("--keyframes-per-submap", args->options.submap.keyframes_per_submap,
                   "Keyframes at which a submap is completed")
       ->capture_default_str();
+  cmd->add_option("--completion-ba-frames", args->options.submap.completion_ba_max_frames,
+                  "Tracked frames that join each submap's final bundle adjustment; 0 = the "
+                  "paper's completion (PnP relocalisation only)")
+      ->capture_default_str();
   cmd->add_option("--feature-workers", args->options.feature_workers,
                   "Frames whose SIFT features are extracted in parallel")
       ->capture_default_str();

@@ -1,7 +1,9 @@
 // One verified correspondence between two submaps: landmark_a of submap a and landmark_b of
 // submap b are the same ground point, each given in its own submap frame. Pair verification
 // (submap_verifier.h, a = the reference submap, b = the query) produces them and the submap
-// factor graph (submap_graph.h) consumes them, so both speak this one type.
+// factor graph (submap_graph.h) consumes them, so both speak this one type. Temporal edges
+// also carry pairs made from the frames both submaps posed (shared_frames.h): their ids lie
+// in a reserved range above every landmark id, so they key graph nodes like landmarks do.
 #pragma once
 
 #include <cstdint>

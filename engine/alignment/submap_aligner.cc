@@ -1,5 +1,7 @@
 #include "engine/alignment/submap_aligner.h"
 
+#include "engine/alignment/shared_frames.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -37,6 +39,7 @@ void AlignerOptions::Check() const {
   CheckGreaterEqual("AlignerOptions.max_candidates", max_candidates, 0);
   CheckInRange("AlignerOptions.min_relative_score", min_relative_score, 0.0, 1.0);
   CheckGreater("AlignerOptions.max_scale_disagreement", max_scale_disagreement, 1.0);
+  CheckGreaterEqual("AlignerOptions.local_window", local_window, 0);
 }
 
 SubmapAligner::SubmapAligner(const VocabularyTree& vocabulary, const AlignerOptions& options,
@@ -82,8 +85,10 @@ void SubmapAligner::Add(const Submap& submap) {
   } else if (std::any_of(verified.begin(), verified.end(), [&](const VerifiedEdge& e) {
                return nodes_.at(e.edge.reference).component == 0;
              })) {
+    touched_this_add_.clear();
+    joined_this_add_ = false;
     PlaceInMain(submap, verified);
-    const GraphSolveSummary summary = graph_.Optimize(cancel_);
+    const GraphSolveSummary summary = OptimizeAfterAdd();
     GLAM_LOG_DEBUG("graph after submap {}: {} submaps, {} landmarks, {} iterations, cost {:.4g} -> {:.4g}, {:.3f} s",
                    submap.id, graph_.num_submaps(), graph_.num_landmarks(), summary.iterations,
                    summary.initial_cost, summary.final_cost, summary.seconds);
@@ -124,7 +129,12 @@ std::vector<SubmapAligner::VerifiedEdge> SubmapAligner::VerifyCandidates(
   const bool temporal = previous_ && submap.first_frame <= previous_->last_frame;
   auto verify_start = Clock::now();
   if (temporal) {
-    record(*previous_, VerifySubmapPair(*previous_, submap, options_.verification), true, 0);
+    PairVerification v = VerifySubmapPair(*previous_, submap, options_.verification);
+    if (v.verified && options_.use_shared_frames) {
+      const std::vector<LandmarkMatch> frames = SharedFrameMatches(*previous_, submap, v.reference_from_query);
+      v.inlier_pairs.insert(v.inlier_pairs.end(), frames.begin(), frames.end());
+    }
+    record(*previous_, std::move(v), true, 0);
   }
   timing->verification_s += Seconds(verify_start);
 
@@ -259,6 +269,7 @@ void SubmapAligner::JoinMain(int component, const Sim3& world_from_component) {
     AddToGraph(id, world_from_component * component_from_submap);
   }
   for (const VerifiedEdge& edge : pending.edges) AddEdgeToGraph(edge);
+  joined_this_add_ = true;
   GLAM_LOG_INFO("{} disconnected submaps joined the map", pending.component_from_submap.size());
 }
 
@@ -266,11 +277,24 @@ void SubmapAligner::AddToGraph(std::uint32_t id, const Sim3& world_from_submap) 
   Node& node = nodes_.at(id);
   node.component = 0;
   graph_.AddSubmap(id, world_from_submap, node.depth_scale);
+  graph_order_.push_back(id);
 }
 
 void SubmapAligner::AddEdgeToGraph(const VerifiedEdge& edge) {
   graph_.AddEdge(edge.edge.reference, edge.edge.query, edge.pairs);
   edges_.push_back(edge.edge);
+  touched_this_add_.insert(edge.edge.reference);
+  touched_this_add_.insert(edge.edge.query);
+}
+
+GraphSolveSummary SubmapAligner::OptimizeAfterAdd() {
+  const auto window = static_cast<std::size_t>(options_.local_window);
+  if (window == 0 || joined_this_add_ || graph_order_.size() <= window) return graph_.Optimize(cancel_);
+  const std::set<std::uint32_t> recent(graph_order_.end() - static_cast<std::ptrdiff_t>(window), graph_order_.end());
+  for (std::uint32_t id : touched_this_add_) {
+    if (!recent.contains(id)) return graph_.Optimize(cancel_);  // a loop closure: all of it
+  }
+  return graph_.OptimizeSubset(recent, cancel_);
 }
 
 Sim3 SubmapAligner::CurrentWorldFromSubmap(std::uint32_t id) const {

@@ -18,6 +18,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <map>
+#include <set>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -48,6 +49,16 @@ struct AlignerOptions {
   // A retrieved edge inside the main map is rejected when its scale disagrees with the current
   // estimate by more than this factor (a gross mismatch, not drift).
   double max_scale_disagreement = 1.5;
+  // Temporal edges also get the frames both submaps posed (shared_frames.h): camera centre
+  // and a point ahead per shared frame, beside the matched landmarks. false = the paper's
+  // landmark-only edges.
+  bool use_shared_frames = true;
+  // A submap whose edges all reach the last `local_window` submaps of the map (the usual case:
+  // its temporal neighbour) is optimised with only those submaps free
+  // (SubmapGraph::OptimizeSubset); a loop closure or re-localisation farther back, or a
+  // disconnected part joining, re-optimises the whole graph. 0 = always the whole graph (the
+  // paper). Keeps thread 2's cost per submap flat on long flights.
+  int local_window = 8;
   SubmapGraphOptions graph;
   LevelingOptions leveling;
 
@@ -124,6 +135,8 @@ class SubmapAligner {
   void JoinMain(int component, const Sim3& world_from_component);
   void AddToGraph(std::uint32_t id, const Sim3& world_from_submap);
   void AddEdgeToGraph(const VerifiedEdge& edge);
+  // Whole graph or the local window, by what the current Add() changed (see local_window).
+  GraphSolveSummary OptimizeAfterAdd();
   Sim3 CurrentWorldFromSubmap(std::uint32_t id) const;
   void Publish();
 
@@ -138,6 +151,9 @@ class SubmapAligner {
   int next_component_ = 1;
   std::optional<Submap> previous_;  // the temporal neighbour of the next submap
   std::vector<AlignmentEdge> edges_;
+  std::vector<std::uint32_t> graph_order_;     // submaps in the order they joined the graph
+  std::set<std::uint32_t> touched_this_add_;   // submaps an edge added by this Add() links
+  bool joined_this_add_ = false;               // a pending component joined in this Add()
   std::vector<SubmapAlignmentTiming> timings_;
   std::int64_t revision_ = 0;
   mutable std::mutex snapshot_mutex_;

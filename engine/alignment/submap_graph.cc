@@ -1,5 +1,6 @@
 #include "engine/alignment/submap_graph.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <string>
@@ -127,6 +128,7 @@ void SubmapGraph::AddSubmap(std::uint32_t id, const Sim3& world_from_submap_init
   double* block = node->parameters.data();
   problem_->AddParameterBlock(block, kSim3AmbientSize, manifold_.get());
   if (submaps_.empty()) {
+    gauge_ = id;
     problem_->SetParameterBlockConstant(block);  // gauge
   } else if (options_.scale_prior_weight > 0) {
     problem_->AddResidualBlock(
@@ -221,7 +223,36 @@ void SubmapGraph::AddEdge(std::uint32_t submap_a, std::uint32_t submap_b,
   ++num_edges_;
 }
 
-GraphSolveSummary SubmapGraph::Optimize(CancellationToken cancel) {
+GraphSolveSummary SubmapGraph::Optimize(CancellationToken cancel) { return Solve(cancel); }
+
+GraphSolveSummary SubmapGraph::OptimizeSubset(const std::set<std::uint32_t>& free,
+                                              CancellationToken cancel) {
+  // Ceres leaves residuals whose blocks are all constant out of the reduced problem, so
+  // holding the far submaps and the landmark nodes only they observe shrinks the solve to
+  // the window; the held blocks are released again whatever happens in the solve.
+  std::vector<double*> held;
+  for (const auto& [id, node] : submaps_) {
+    if (id == gauge_ || free.contains(id)) continue;
+    held.push_back(node->parameters.data());
+  }
+  for (const auto& node : landmarks_) {
+    if (!node) continue;
+    const bool seen_by_free = std::any_of(node->observations.begin(), node->observations.end(),
+                                          [&](const Observation& o) { return free.contains(o.submap); });
+    if (!seen_by_free) held.push_back(node->position.data());
+  }
+  for (double* block : held) problem_->SetParameterBlockConstant(block);
+  struct Release {
+    ceres::Problem& problem;
+    const std::vector<double*>& blocks;
+    ~Release() {
+      for (double* block : blocks) problem.SetParameterBlockVariable(block);
+    }
+  } release{*problem_, held};
+  return Solve(cancel);
+}
+
+GraphSolveSummary SubmapGraph::Solve(const CancellationToken& cancel) {
   const auto start = std::chrono::steady_clock::now();
   GraphSolveSummary summary;
   summary.solver = options_.linear_solver;

@@ -33,6 +33,7 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <set>
 #include <span>
 #include <string_view>
 #include <unordered_map>
@@ -130,6 +131,11 @@ class SubmapGraph {
   // Levenberg-Marquardt from the current values. Throws glam::Cancelled if `cancel` fires
   // (the solver is aborted through an IterationCallback and the values stay as before).
   GraphSolveSummary Optimize(CancellationToken cancel = {});
+  // The same, with only the submaps in `free` (and the landmark nodes they observe) varying;
+  // every other submap and landmark node is held for this solve. The aligner uses it when a
+  // new submap only links to its recent neighbours: the rest of the graph's optimum hardly
+  // moves then, and the cost of a solve stops growing with the flight (docs/algorithm.md).
+  GraphSolveSummary OptimizeSubset(const std::set<std::uint32_t>& free, CancellationToken cancel = {});
 
   Sim3 world_from_submap(std::uint32_t id) const;  // aborts on an unknown id
   bool HasSubmap(std::uint32_t id) const;
@@ -152,6 +158,7 @@ class SubmapGraph {
   std::size_t Merge(std::size_t a, std::size_t b);
   void AddFactor(LandmarkNode& node, const Observation& observation);
   Eigen::Vector3d ObservedInWorld(const Observation& observation) const;
+  GraphSolveSummary Solve(const CancellationToken& cancel);
 
   SubmapGraphOptions options_;
   std::unique_ptr<Sim3Manifold> manifold_;
@@ -163,6 +170,7 @@ class SubmapGraph {
   std::size_t num_landmarks_ = 0;
   std::size_t num_observations_ = 0;
   std::size_t num_edges_ = 0;
+  std::uint32_t gauge_ = 0;  // the first submap added; always held
 };
 
 }  // namespace glam

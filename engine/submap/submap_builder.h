@@ -103,7 +103,12 @@ class SubmapBuilder {
 
   // submap_completion.cc
   Submap Complete();
-  void RelocaliseFrames();
+  // Relocalises frames by PnP against the final landmarks; frames whose position in `frames`
+  // is in `keep` (already refined) are left as they are.
+  void RelocaliseFrames(const std::vector<bool>& keep = {});
+  // The completion bundle adjustment (SubmapOptions::completion_ba_max_frames); returns which
+  // frame positions it refined.
+  std::vector<bool> RefineWithTrackedFrames();
   void HandOffOverlap(std::vector<Submap>* completed);
 
   Camera CurrentCamera() const;

@@ -3,19 +3,94 @@
 // matches found while tracking are needed, no features are recomputed — and points that are
 // inconsistent with the final poses are removed (the third outlier filter).
 #include <algorithm>
+#include <unordered_map>
 
 #include "engine/core/logging.h"
 #include "engine/geometry/absolute_pose.h"
 #include "engine/submap/submap_builder.h"
 
 namespace glam {
+namespace {
 
-void SubmapBuilder::RelocaliseFrames() {
+// Up to `count` of `candidates` (sorted positions), spread evenly over them.
+std::vector<std::size_t> PickEvenly(const std::vector<std::size_t>& candidates, std::size_t count) {
+  if (candidates.size() <= count) return candidates;
+  std::vector<std::size_t> picked;
+  for (std::size_t i = 0; i < count; ++i) picked.push_back(candidates[i * candidates.size() / count]);
+  return picked;
+}
+
+}  // namespace
+
+std::vector<bool> SubmapBuilder::RefineWithTrackedFrames() {
+  std::vector<bool> refined(open_.frames.size(), false);
+  const auto max_frames = static_cast<std::size_t>(options_.completion_ba_max_frames);
+  if (max_frames == 0) return refined;
+  std::vector<bool> is_keyframe(open_.frames.size(), false);
+  for (std::size_t p : open_.keyframe_frame_positions) is_keyframe[p] = true;
+  std::vector<std::size_t> detected;
+  std::vector<std::size_t> carried;
+  for (std::size_t p = 0; p < open_.frames.size(); ++p) {
+    const FrameRecord& frame = open_.frames[p];
+    if (is_keyframe[p] || !frame.cam_from_submap ||
+        static_cast<int>(frame.landmark_matches.size()) < options_.min_tracking_inliers) {
+      continue;
+    }
+    (frame.detected ? detected : carried).push_back(p);
+  }
+  // Detection frames first (they see ground the carried-over keypoints do not).
+  std::vector<std::size_t> chosen = PickEvenly(detected, max_frames);
+  if (chosen.size() < max_frames) {
+    const std::vector<std::size_t> more = PickEvenly(carried, max_frames - chosen.size());
+    chosen.insert(chosen.end(), more.begin(), more.end());
+  }
+  if (chosen.empty()) return refined;
+
+  // Keyframes first (the BA gauge holds keyframes 0 and 1), then the chosen frames, observing
+  // copies of the landmarks; only poses and positions are taken back, so the submap's
+  // observations keep indexing keyframes.
+  std::vector<Keyframe> views = open_.keyframes;
+  std::vector<Landmark> landmarks = open_.landmarks;
+  std::unordered_map<std::uint32_t, std::size_t> row_of_id;
+  for (std::size_t i = 0; i < landmarks.size(); ++i) row_of_id[landmarks[i].id] = i;
+  for (std::size_t p : chosen) {
+    const FrameRecord& frame = open_.frames[p];
+    const auto view = static_cast<std::uint32_t>(views.size());
+    views.push_back({frame.index, *frame.cam_from_submap, focal_});
+    for (const auto& [feature, id] : frame.landmark_matches) {
+      const auto it = row_of_id.find(id);
+      if (it == row_of_id.end()) continue;
+      landmarks[it->second].observations.push_back({view, frame.features.points[feature]});
+    }
+  }
+  BundleAdjustmentOptions ba = options_.bundle_adjustment;
+  ba.refine_focal = false;  // focal estimation is the incremental BAs' job
+  const auto summary = BundleAdjust(CurrentCamera().intrinsics(), views, landmarks, ba, cancel_);
+  stats_.bundle_adjust_seconds += summary.seconds;
+  for (std::size_t k = 0; k < open_.keyframes.size(); ++k) {
+    open_.keyframes[k].cam_from_submap = views[k].cam_from_submap;
+  }
+  for (std::size_t i = 0; i < landmarks.size(); ++i) {
+    open_.landmarks[i].point_in_submap = landmarks[i].point_in_submap;
+  }
+  for (std::size_t c = 0; c < chosen.size(); ++c) {
+    open_.frames[chosen[c]].cam_from_submap = views[open_.keyframes.size() + c].cam_from_submap;
+    refined[chosen[c]] = true;
+  }
+  GLAM_LOG_DEBUG("completion BA: {} keyframes + {} tracked frames, rms {:.3f} -> {:.3f} px ({:.3f} s)",
+                 open_.keyframes.size(), chosen.size(), summary.initial_rms_pixels,
+                 summary.final_rms_pixels, summary.seconds);
+  return refined;
+}
+
+void SubmapBuilder::RelocaliseFrames(const std::vector<bool>& keep) {
   const Camera camera = CurrentCamera();
   RansacOptions pnp;
   pnp.inlier_threshold = options_.pnp_threshold_pixels;
   pnp.min_inliers = options_.min_tracking_inliers;
-  for (FrameRecord& frame : open_.frames) {
+  for (std::size_t p = 0; p < open_.frames.size(); ++p) {
+    if (p < keep.size() && keep[p]) continue;
+    FrameRecord& frame = open_.frames[p];
     std::vector<Eigen::Vector2d> pixels;
     std::vector<Eigen::Vector3d> points;
     for (const auto& [feature, id] : frame.landmark_matches) {
@@ -48,7 +123,11 @@ Submap SubmapBuilder::Complete() {
   RemoveReprojectionOutliers(camera.intrinsics(), open_.keyframes, open_.landmarks, options_.outlier_filter);
   RemoveIsolatedLandmarks(open_.landmarks, options_.outlier_filter);
   RemoveWeaklyTriangulatedLandmarks(open_.keyframes, open_.landmarks, options_.outlier_filter);
-  RelocaliseFrames();
+  const std::vector<bool> refined = RefineWithTrackedFrames();
+  if (options_.completion_ba_max_frames > 0) {
+    RemoveReprojectionOutliers(camera.intrinsics(), open_.keyframes, open_.landmarks, options_.outlier_filter);
+  }
+  RelocaliseFrames(refined);
 
   Submap submap;
   submap.id = next_submap_id_++;

@@ -32,6 +32,7 @@ void SubmapOptions::Check() const {
   CheckInRange("SubmapOptions.min_triangulation_angle_deg", min_triangulation_angle_deg, 0.0, 45.0);
   CheckGreater("SubmapOptions.max_new_point_reprojection_pixels", max_new_point_reprojection_pixels, 0.0);
   CheckGreaterEqual("SubmapOptions.max_frames_per_submap", max_frames_per_submap, 10);
+  CheckGreaterEqual("SubmapOptions.completion_ba_max_frames", completion_ba_max_frames, 0);
   if (min_tracking_inliers >= tau_resection) {
     throw InputError("SubmapOptions.min_tracking_inliers must be below tau_resection");
   }

@@ -56,6 +56,15 @@ struct SubmapOptions {
   // keyframe count (keeps per-frame feature storage bounded on a hovering drone).
   int max_frames_per_submap = 1500;
 
+  // --- completion ---
+  // Before the final relocalisation, up to this many tracked (non-key) frames of the submap
+  // join one last bundle adjustment with their PnP inlier matches as observations (focal
+  // lengths fixed). Keyframes alone leave most landmarks seen from two or three views far
+  // apart in time; the tracked frames in between add the views a batch reconstruction would
+  // have. 0 = the paper's completion (PnP relocalisation only). Frames are picked evenly
+  // over the submap, detection frames first.
+  int completion_ba_max_frames = 20;
+
   BundleAdjustmentOptions bundle_adjustment;
   OutlierFilterOptions outlier_filter;
 

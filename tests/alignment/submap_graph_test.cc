@@ -7,6 +7,7 @@
 #include <cmath>
 #include <numbers>
 #include <random>
+#include <set>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -229,6 +230,57 @@ TEST(SubmapGraph, IncrementalWarmStartReachesTheBatchOptimum) {
   const PoseErrors after = MaxErrors(graph, s.truth);
   EXPECT_LT(after.rotation_deg, 1.0);
   EXPECT_LT(after.translation, 0.03);
+}
+
+TEST(SubmapGraph, SubsetSolveHoldsTheRestAndReleasesItAfterwards) {
+  const Scenario s = StripScenario(0.005, 0.0, 41);
+  const std::vector<Sim3> initial = PerturbedInitial(s.truth, 42);
+  SubmapGraph graph;
+  AddScenario(s, initial, &graph);
+  const GraphSolveSummary local = graph.OptimizeSubset({3, 4});
+  EXPECT_TRUE(local.usable);
+  EXPECT_LT(local.final_cost, local.initial_cost);
+  for (std::uint32_t i : {1u, 2u}) {
+    EXPECT_EQ((graph.world_from_submap(i).matrix() - initial[i].matrix()).norm(), 0.0) << "held submap " << i;
+  }
+  for (std::uint32_t i : {3u, 4u}) {
+    EXPECT_GT((graph.world_from_submap(i).matrix() - initial[i].matrix()).norm(), 1e-3) << "free submap " << i;
+  }
+  // Everything is free again for the next solve, which reaches the truth.
+  EXPECT_TRUE(graph.Optimize().usable);
+  EXPECT_GT((graph.world_from_submap(1).matrix() - initial[1].matrix()).norm(), 1e-3);
+  const PoseErrors after = MaxErrors(graph, s.truth);
+  EXPECT_LT(after.rotation_deg, 1.0);
+  EXPECT_LT(after.translation, 0.03);
+}
+
+TEST(SubmapGraph, WindowedIncrementalSolvesOfAChainMatchTheBatchOptimum) {
+  // The aligner's local window: each new submap of a chain (temporal edges only) is solved
+  // with only the last two submaps free. On a chain the older submaps' optimum hardly moves,
+  // so the result must match one batch solve of all of it.
+  Scenario s = StripScenario(0.005, 0.0, 51);
+  std::erase_if(s.edges, [](const Scenario::Edge& e) { return e.b != e.a + 1; });
+  const std::vector<Sim3> initial = PerturbedInitial(s.truth, 52);
+  SubmapGraph graph;
+  for (std::uint32_t i = 0; i < s.truth.size(); ++i) {
+    graph.AddSubmap(i, i == 0 ? initial[0] : graph.world_from_submap(i - 1) *
+                                                 initial[i - 1].Inverse() * initial[i],
+                    DepthScale(s.truth[i]));
+    for (const Scenario::Edge& e : s.edges) {
+      if (e.b == i) graph.AddEdge(e.a, e.b, e.matches);
+    }
+    const std::set<std::uint32_t> window = i == 0 ? std::set<std::uint32_t>{0} : std::set<std::uint32_t>{i - 1, i};
+    EXPECT_TRUE(graph.OptimizeSubset(window).usable);
+  }
+  SubmapGraph batch;
+  AddScenario(s, initial, &batch);
+  batch.Optimize();
+  for (std::uint32_t i = 0; i < s.truth.size(); ++i) {
+    const Sim3 a = graph.world_from_submap(i), b = batch.world_from_submap(i);
+    EXPECT_LT(RotationErrorDeg(a, b), 0.02) << i;
+    EXPECT_LT(std::abs(a.scale() / b.scale() - 1), 2e-3) << i;
+    EXPECT_LT((a.translation() - b.translation()).norm(), 2e-3 * kAltitude) << i;
+  }
 }
 
 TEST(SubmapGraph, HuberKeepsGrossOutliersFromPullingTheSolution) {

@@ -9,9 +9,7 @@
 //
 // Features come from the product's feature stage (DecoderWorker) under both schedules: the
 // default (SIFT on every 6th frame, KLT in between) and the paper's (SIFT on every frame).
-#include <atomic>
 #include <map>
-#include <thread>
 #include <set>
 
 #include <gtest/gtest.h>
@@ -20,10 +18,7 @@
 #include "engine/core/logging.h"
 #include "engine/core/similarity_alignment.h"
 #include "engine/export/tum_trajectory.h"
-#include "engine/pipeline/decoder_worker.h"
-#include "engine/pipeline/mapping_options.h"
-#include "engine/submap/submap_builder.h"
-#include "engine/video/frame_source.h"
+#include "tests/support/clip_runner.h"
 #include "tools/eval/ground_truth_surface.h"
 
 namespace glam {
@@ -51,28 +46,10 @@ class SubmapBuilderOnSyntheticClip : public ::testing::Test {
     options.keyframes_per_submap = 6;
     // Calibrated intrinsics are given (as `glam map --intrinsics` does): focal stays fixed.
     options.bundle_adjustment.refine_focal = false;
-    SubmapBuilder builder(*intrinsics_, options);
-    auto source = OpenFrameSource(dir / "video.mp4");
-    MappingOptions mapping;
-    mapping.detection_interval = S::interval;
-    FeatureStageOptions stage;
-    stage.detection_interval = mapping.EffectiveDetectionInterval(source->info().fps);
-    std::printf("SIFT on every %d. frame\n", stage.detection_interval);
-    BoundedQueue<FrameFeatures> queue(8);
-    std::atomic<bool> stop{false};
-    DecoderWorker worker(*source, stage, queue, {}, stop);
-    std::thread decoder([&worker] { worker.Run(); });
-    submaps_ = new std::vector<Submap>();
-    while (std::optional<FrameFeatures> item = queue.Pop()) {
-      for (Submap& s : builder.AddFrame(item->index, item->timestamp_s, item->features)) {
-        submaps_->push_back(std::move(s));
-      }
-    }
-    decoder.join();
-    if (worker.error()) std::rethrow_exception(worker.error());
-    for (Submap& s : builder.Finish()) submaps_->push_back(std::move(s));
-    frames_ = source->frames_delivered();
-    focal_ = builder.focal();
+    test_support::ClipRun run = test_support::RunSubmapBuilderOnClip(dir / "video.mp4", *intrinsics_, options, S::interval);
+    submaps_ = new std::vector<Submap>(std::move(run.submaps));
+    frames_ = run.frames;
+    focal_ = run.focal;
   }
   static void TearDownTestSuite() {
     delete intrinsics_;

@@ -1,0 +1,28 @@
+// Runs thread 1 (SubmapBuilder) over a synthetic fixture video with the product's feature
+// stage (DecoderWorker), as the pipeline does, and keeps the completed submaps for the
+// accuracy tests. Shared by the tests that compare configurations on the same clip.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <vector>
+
+#include "engine/core/camera.h"
+#include "engine/map/submap.h"
+#include "engine/submap/submap_options.h"
+
+namespace glam::test_support {
+
+struct ClipRun {
+  std::vector<Submap> submaps;
+  std::int64_t frames = 0;  // frames fed to the builder
+  double focal = 0;         // the builder's final focal estimate
+};
+
+// detection_interval: 0 = the product's automatic schedule, 1 = SIFT on every frame (paper).
+// max_frames < 0: the whole video.
+ClipRun RunSubmapBuilderOnClip(const std::filesystem::path& video, const Intrinsics& intrinsics,
+                               const SubmapOptions& options, int detection_interval,
+                               std::int64_t max_frames = -1);
+
+}  // namespace glam::test_support
