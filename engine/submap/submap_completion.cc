@@ -1,7 +1,10 @@
 // Submap completion (paper, "Completion"): after the last keyframe's bundle adjustment, every
 // frame of the submap is relocalised by PnP against the final landmarks — only the 3D-2D
 // matches found while tracking are needed, no features are recomputed — and points that are
-// inconsistent with the final poses are removed (the third outlier filter).
+// inconsistent with the final poses are removed (the third outlier filter). Added to the
+// paper: before the relocalisation, up to SubmapOptions::completion_ba_max_frames tracked
+// frames join one last bundle adjustment with their tracking matches as observations, so
+// landmarks are adjusted with the views in between keyframes too (docs/algorithm.md).
 #include <algorithm>
 #include <unordered_map>
 
