@@ -117,6 +117,16 @@ void AddScenario(const Scenario& s, const std::vector<Sim3>& initial, SubmapGrap
   for (const Scenario::Edge& e : s.edges) graph->AddEdge(e.a, e.b, e.matches);
 }
 
+// Submap i placed from the current estimate of its neighbour (the aligner's pattern), with
+// the edges that arrive with it.
+void AddNextSubmap(const Scenario& s, const std::vector<Sim3>& initial, std::uint32_t i, SubmapGraph* graph) {
+  graph->AddSubmap(i, i == 0 ? initial[0] : graph->world_from_submap(i - 1) * initial[i - 1].Inverse() * initial[i],
+                   DepthScale(s.truth[i]));
+  for (const Scenario::Edge& e : s.edges) {
+    if (std::max(e.a, e.b) == i) graph->AddEdge(e.a, e.b, e.matches);
+  }
+}
+
 struct PoseErrors {
   double rotation_deg = 0;
   double scale = 0;        // relative
@@ -204,12 +214,7 @@ TEST(SubmapGraph, IncrementalWarmStartReachesTheBatchOptimum) {
   const std::vector<Sim3> initial = PerturbedInitial(s.truth, 32);
   SubmapGraph graph;
   for (std::uint32_t i = 0; i < s.truth.size(); ++i) {
-    graph.AddSubmap(i, i == 0 ? initial[0] : graph.world_from_submap(i - 1) *
-                                                 initial[i - 1].Inverse() * initial[i],
-                    DepthScale(s.truth[i]));
-    for (const Scenario::Edge& e : s.edges) {
-      if (std::max(e.a, e.b) == i) graph.AddEdge(e.a, e.b, e.matches);
-    }
+    AddNextSubmap(s, initial, i, &graph);
     EXPECT_TRUE(graph.Optimize().usable);
   }
   EXPECT_EQ(graph.num_submaps(), 5u);
@@ -263,12 +268,7 @@ TEST(SubmapGraph, WindowedIncrementalSolvesOfAChainMatchTheBatchOptimum) {
   const std::vector<Sim3> initial = PerturbedInitial(s.truth, 52);
   SubmapGraph graph;
   for (std::uint32_t i = 0; i < s.truth.size(); ++i) {
-    graph.AddSubmap(i, i == 0 ? initial[0] : graph.world_from_submap(i - 1) *
-                                                 initial[i - 1].Inverse() * initial[i],
-                    DepthScale(s.truth[i]));
-    for (const Scenario::Edge& e : s.edges) {
-      if (e.b == i) graph.AddEdge(e.a, e.b, e.matches);
-    }
+    AddNextSubmap(s, initial, i, &graph);
     const std::set<std::uint32_t> window = i == 0 ? std::set<std::uint32_t>{0} : std::set<std::uint32_t>{i - 1, i};
     EXPECT_TRUE(graph.OptimizeSubset(window).usable);
   }
