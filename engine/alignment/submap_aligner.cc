@@ -1,7 +1,5 @@
 #include "engine/alignment/submap_aligner.h"
 
-#include "engine/alignment/shared_frames.h"
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -9,6 +7,7 @@
 
 #include <fmt/format.h>
 
+#include "engine/alignment/shared_frames.h"
 #include "engine/core/logging.h"
 #include "engine/core/options.h"
 #include "engine/map/submap_io.h"
