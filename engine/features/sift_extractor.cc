@@ -7,6 +7,7 @@
 
 #include "engine/core/error.h"
 #include "engine/core/options.h"
+#include "engine/features/gray_image.h"
 
 namespace glam {
 
@@ -82,12 +83,7 @@ std::vector<cv::KeyPoint> SiftExtractor::Bucket(std::vector<cv::KeyPoint> keypoi
 Features SiftExtractor::Extract(const cv::Mat& image) const {
   GLAM_CHECK(!image.empty() && image.depth() == CV_8U &&
              (image.channels() == 3 || image.channels() == 1));
-  cv::Mat gray;
-  if (image.channels() == 3) {
-    cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
-  } else {
-    gray = image;
-  }
+  cv::Mat gray = ToGray(image);
   const double scale = options_.extraction_scale;
   if (scale < 1.0) cv::resize(gray, gray, cv::Size(), scale, scale, cv::INTER_AREA);
 

@@ -4,9 +4,8 @@
 #include <optional>
 #include <thread>
 
-#include <opencv2/imgproc.hpp>
-
 #include "engine/core/options.h"
+#include "engine/features/gray_image.h"
 
 namespace glam {
 namespace {
@@ -15,13 +14,6 @@ using Clock = std::chrono::steady_clock;
 
 double Seconds(Clock::time_point since) {
   return std::chrono::duration<double>(Clock::now() - since).count();
-}
-
-cv::Mat Gray(const cv::Mat& bgr) {
-  if (bgr.channels() == 1) return bgr;
-  cv::Mat gray;
-  cv::cvtColor(bgr, gray, cv::COLOR_BGR2GRAY);
-  return gray;
 }
 
 }  // namespace
@@ -123,7 +115,7 @@ void DecoderWorker::RunWithPropagation() {
   std::optional<Frame> first = source_.Next();
   if (!first) return;
   FrameFeatures reference = Detect(*first, 0);
-  klt_.SetReference(Gray(first->bgr), reference.features);
+  klt_.SetReference(ToGray(first->bgr), reference.features);
   busy_seconds_ += Seconds(first_start);
   if (!Emit(std::move(reference))) return;
 
@@ -158,7 +150,7 @@ void DecoderWorker::RunWithPropagation() {
     std::exception_ptr propagation_error;
     try {
       for (std::size_t i = 0; i < propagated && open; ++i) {
-        const cv::Mat gray = Gray(frames[i].bgr);
+        const cv::Mat gray = ToGray(frames[i].bgr);
         FrameFeatures item{frames[i].index, frames[i].timestamp_s, klt_.Propagate(gray)};
         const double survival = static_cast<double>(item.features.size()) /
                                 static_cast<double>(std::max<std::size_t>(1, klt_.reference_size()));
@@ -179,7 +171,7 @@ void DecoderWorker::RunWithPropagation() {
     if (!open) return;
     if (detect_last && extractors_.size() == 1 && !detection_error) detect_last_frame();
     if (detection_error) std::rethrow_exception(detection_error);
-    if (detection) klt_.SetReference(Gray(frames.back().bgr), detection->features);
+    if (detection) klt_.SetReference(ToGray(frames.back().bgr), detection->features);
     busy_seconds_ += Seconds(start);
     if (detection && !Emit(std::move(*detection))) return;
     if (!detect_last) return;

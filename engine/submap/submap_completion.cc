@@ -127,7 +127,8 @@ Submap SubmapBuilder::Complete() {
   RemoveIsolatedLandmarks(open_.landmarks, options_.outlier_filter);
   RemoveWeaklyTriangulatedLandmarks(open_.keyframes, open_.landmarks, options_.outlier_filter);
   const std::vector<bool> refined = RefineWithTrackedFrames();
-  if (options_.completion_ba_max_frames > 0) {
+  if (std::find(refined.begin(), refined.end(), true) != refined.end()) {
+    // The completion BA moved the landmarks: filter 1 once more on their final positions.
     RemoveReprojectionOutliers(camera.intrinsics(), open_.keyframes, open_.landmarks, options_.outlier_filter);
   }
   RelocaliseFrames(refined);
