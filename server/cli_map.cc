@@ -30,6 +30,7 @@ struct MapArgs {
   std::string intrinsics_path;
   double focal = 0;
   bool refine_focal = false;
+  bool per_keyframe_focal = false;
   std::string vocabulary_path;
   bool max_features_given = false;  // --max-features on the command line
   MappingOptions options;
@@ -83,6 +84,7 @@ void RunMap(MapArgs& args) {
     args.options.submap.bundle_adjustment.refine_focal = args.refine_focal;
   }
   if (args.focal != 0) args.options.focal_px = args.focal;
+  if (args.per_keyframe_focal) args.options.submap.bundle_adjustment.share_focal = false;
   if (!args.vocabulary_path.empty()) args.options.vocabulary = args.vocabulary_path;
   args.options.Check();
   if (!std::filesystem::exists(args.input)) {
@@ -137,6 +139,9 @@ void RegisterMapCommand(CLI::App& app) {
                   "Focal length in pixels at original resolution (default: 0.8 x long side, refined)");
   cmd->add_flag("--refine-focal", args->refine_focal,
                "Refine the focal length of --intrinsics too (always refined without them)");
+  cmd->add_flag("--per-keyframe-focal", args->per_keyframe_focal,
+               "Bundle adjustment refines one focal per keyframe (the paper) instead of one per "
+               "submap");
   cmd->add_option("--max-image-size", args->options.source.max_image_size,
                   "Downscale frames to this long side (px); 0 = never")
       ->capture_default_str();

@@ -1,5 +1,6 @@
 #include "engine/submap/bundle_adjuster.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -91,6 +92,7 @@ void BundleAdjustmentOptions::Check() const {
   CheckGreater("BundleAdjustmentOptions.max_iterations", max_iterations, 0);
   CheckGreater("BundleAdjustmentOptions.huber_pixels", huber_pixels, 0.0);
   CheckGreaterEqual("BundleAdjustmentOptions.focal_prior_weight", focal_prior_weight, 0.0);
+  CheckGreaterEqual("BundleAdjustmentOptions.focal_prior_px", focal_prior_px, 0.0);
   CheckGreaterEqual("BundleAdjustmentOptions.fixed_keyframes", fixed_keyframes, 1);
   CheckGreater("BundleAdjustmentOptions.num_threads", num_threads, 0);
 }
@@ -127,6 +129,16 @@ BundleAdjustmentSummary BundleAdjust(const Intrinsics& intrinsics, std::vector<K
                 keyframes[k].focal};
   }
 
+  // One focal for all keyframes (options.share_focal): starts at the prior's centre, or at the
+  // keyframes' median when there is none.
+  double shared_focal = options.focal_prior_px;
+  if (options.share_focal && shared_focal <= 0) {
+    std::vector<double> focals;
+    for (const Keyframe& kf : keyframes) focals.push_back(kf.focal);
+    std::nth_element(focals.begin(), focals.begin() + static_cast<std::ptrdiff_t>(focals.size() / 2), focals.end());
+    shared_focal = focals[focals.size() / 2];
+  }
+
   // The problem owns cost, loss and manifold objects; Ceres reference-counts the shared loss.
   ceres::Problem problem;
   auto* loss = new ceres::HuberLoss(options.huber_pixels);
@@ -136,8 +148,8 @@ BundleAdjustmentSummary BundleAdjust(const Intrinsics& intrinsics, std::vector<K
       auto* cost = new ceres::AutoDiffCostFunction<ReprojectionCost, 2, 4, 3, 1, 3>(
           new ReprojectionCost(obs.pixel.cast<double>(), intrinsics));
       PoseBlock& pose = poses[obs.keyframe];
-      problem.AddResidualBlock(cost, loss, pose.rotation, pose.translation, &pose.focal,
-                               lm.point_in_submap.data());
+      problem.AddResidualBlock(cost, loss, pose.rotation, pose.translation,
+                               options.share_focal ? &shared_focal : &pose.focal, lm.point_in_submap.data());
       keyframe_used[obs.keyframe] = true;
     }
   }
@@ -156,13 +168,25 @@ BundleAdjustmentSummary BundleAdjust(const Intrinsics& intrinsics, std::vector<K
       }
       problem.SetManifold(pose.translation, new ceres::SubsetManifold(3, {largest}));
     }
+    if (options.share_focal) continue;
     if (options.refine_focal) {
       problem.AddResidualBlock(
           new ceres::AutoDiffCostFunction<FocalPriorCost, 1, 1>(
-              new FocalPriorCost(keyframes[k].focal, options.focal_prior_weight)),
+              new FocalPriorCost(options.focal_prior_px > 0 ? options.focal_prior_px : keyframes[k].focal,
+                                 options.focal_prior_weight)),
           nullptr, &pose.focal);
     } else {
       problem.SetParameterBlockConstant(&pose.focal);
+    }
+  }
+
+  if (options.share_focal && problem.HasParameterBlock(&shared_focal)) {
+    if (options.refine_focal) {
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<FocalPriorCost, 1, 1>(
+                                   new FocalPriorCost(shared_focal, options.focal_prior_weight)),
+                               nullptr, &shared_focal);
+    } else {
+      problem.SetParameterBlockConstant(&shared_focal);
     }
   }
 
@@ -182,7 +206,7 @@ BundleAdjustmentSummary BundleAdjust(const Intrinsics& intrinsics, std::vector<K
     keyframes[k].cam_from_submap =
         SE3(SO3(Eigen::Quaterniond(pose.rotation[3], pose.rotation[0], pose.rotation[1], pose.rotation[2])),
             Eigen::Vector3d(pose.translation[0], pose.translation[1], pose.translation[2]));
-    keyframes[k].focal = pose.focal;
+    keyframes[k].focal = options.share_focal ? shared_focal : pose.focal;
   }
   summary.final_rms_pixels = RmsReprojection(intrinsics, keyframes, landmarks);
   summary.iterations = static_cast<int>(ceres_summary.iterations.size());

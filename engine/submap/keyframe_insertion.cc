@@ -215,8 +215,9 @@ std::size_t SubmapBuilder::TriangulateBetween(std::size_t first_position, std::s
 
 void SubmapBuilder::OptimiseAndFilter() {
   const Camera camera = CurrentCamera();
-  const auto summary = BundleAdjust(camera.intrinsics(), open_.keyframes, open_.landmarks,
-                                    options_.bundle_adjustment, cancel_);
+  BundleAdjustmentOptions ba = options_.bundle_adjustment;
+  ba.focal_prior_px = focal_;  // the running median (see BundleAdjustmentOptions)
+  const auto summary = BundleAdjust(camera.intrinsics(), open_.keyframes, open_.landmarks, ba, cancel_);
   stats_.bundle_adjust_seconds += summary.seconds;
   RemoveReprojectionOutliers(camera.intrinsics(), open_.keyframes, open_.landmarks, options_.outlier_filter);
   RemoveIsolatedLandmarks(open_.landmarks, options_.outlier_filter);

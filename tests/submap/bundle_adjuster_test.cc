@@ -87,17 +87,44 @@ TEST(BundleAdjuster, RestoresPerturbedSceneUpToGauge) {
 TEST(BundleAdjuster, EstimatesFocalFromTenPercentWrongStart) {
   const double true_focal = 520;
   const Scene truth = MakeScene(true_focal, 0.2, 3);
-  Scene est = truth;
-  for (Keyframe& kf : est.keyframes) kf.focal = true_focal * 1.1;
-  BundleAdjustmentOptions options;
-  options.focal_prior_weight = 0.1;  // weak: the data should decide
-  options.max_iterations = 100;
-  BundleAdjust(est.intrinsics, est.keyframes, est.landmarks, options);
-  std::vector<double> focals;
-  for (const Keyframe& kf : est.keyframes) focals.push_back(kf.focal);
-  std::nth_element(focals.begin(), focals.begin() + focals.size() / 2, focals.end());
-  const double median = focals[focals.size() / 2];
-  EXPECT_NEAR(median, true_focal, 0.01 * true_focal);
+  for (const bool shared : {false, true}) {
+    SCOPED_TRACE(shared ? "one focal for all keyframes" : "one focal per keyframe");
+    Scene est = truth;
+    for (Keyframe& kf : est.keyframes) kf.focal = true_focal * 1.1;
+    BundleAdjustmentOptions options;
+    options.focal_prior_weight = 0.1;  // weak: the data should decide
+    options.max_iterations = 100;
+    options.share_focal = shared;
+    BundleAdjust(est.intrinsics, est.keyframes, est.landmarks, options);
+    std::vector<double> focals;
+    for (const Keyframe& kf : est.keyframes) focals.push_back(kf.focal);
+    std::nth_element(focals.begin(), focals.begin() + focals.size() / 2, focals.end());
+    const double median = focals[focals.size() / 2];
+    EXPECT_NEAR(median, true_focal, 0.01 * true_focal);
+    if (shared) {
+      for (const Keyframe& kf : est.keyframes) EXPECT_EQ(kf.focal, est.keyframes[0].focal);
+    }
+  }
+}
+
+TEST(BundleAdjuster, FocalPriorIsCentredWhereTheOptionsSay) {
+  // Exact data at the true focal and a prior so strong that it decides: without a centre the
+  // focals stay at their own (true) values; with one, they move to it.
+  const double true_focal = 520;
+  const Scene truth = MakeScene(true_focal, 0.0, 6);
+  for (const bool shared : {false, true}) {
+    SCOPED_TRACE(shared ? "shared" : "per keyframe");
+    BundleAdjustmentOptions options;
+    options.focal_prior_weight = 1e7;
+    options.share_focal = shared;
+    Scene own = truth;
+    BundleAdjust(own.intrinsics, own.keyframes, own.landmarks, options);
+    for (const Keyframe& kf : own.keyframes) EXPECT_NEAR(kf.focal, true_focal, 1e-3 * true_focal);
+    options.focal_prior_px = 1.05 * true_focal;
+    Scene centred = truth;
+    BundleAdjust(centred.intrinsics, centred.keyframes, centred.landmarks, options);
+    for (const Keyframe& kf : centred.keyframes) EXPECT_NEAR(kf.focal, 1.05 * true_focal, 1e-3 * true_focal);
+  }
 }
 
 TEST(BundleAdjuster, CancelledTokenThrows) {
@@ -111,6 +138,9 @@ TEST(BundleAdjuster, RejectsBadOptions) {
   Scene s = MakeScene(500, 0.3, 5);
   BundleAdjustmentOptions options;
   options.huber_pixels = -1;
+  EXPECT_THROW(BundleAdjust(s.intrinsics, s.keyframes, s.landmarks, options), InputError);
+  options = {};
+  options.focal_prior_px = -1;
   EXPECT_THROW(BundleAdjust(s.intrinsics, s.keyframes, s.landmarks, options), InputError);
 }
 
