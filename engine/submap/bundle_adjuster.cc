@@ -130,9 +130,11 @@ BundleAdjustmentSummary BundleAdjust(const Intrinsics& intrinsics, std::vector<K
   }
 
   // One focal for all keyframes (options.share_focal): starts at the prior's centre, or at the
-  // keyframes' median when there is none.
+  // keyframes' median when there is none. Only when focals are refined: fixed focals stay each
+  // keyframe's own (the completion BA adds tracked frames at the running median).
+  const bool share = options.share_focal && options.refine_focal;
   double shared_focal = options.focal_prior_px;
-  if (options.share_focal && shared_focal <= 0) {
+  if (share && shared_focal <= 0) {
     std::vector<double> focals;
     for (const Keyframe& kf : keyframes) focals.push_back(kf.focal);
     std::nth_element(focals.begin(), focals.begin() + static_cast<std::ptrdiff_t>(focals.size() / 2), focals.end());
@@ -149,7 +151,7 @@ BundleAdjustmentSummary BundleAdjust(const Intrinsics& intrinsics, std::vector<K
           new ReprojectionCost(obs.pixel.cast<double>(), intrinsics));
       PoseBlock& pose = poses[obs.keyframe];
       problem.AddResidualBlock(cost, loss, pose.rotation, pose.translation,
-                               options.share_focal ? &shared_focal : &pose.focal, lm.point_in_submap.data());
+                               share ? &shared_focal : &pose.focal, lm.point_in_submap.data());
       keyframe_used[obs.keyframe] = true;
     }
   }
@@ -168,7 +170,7 @@ BundleAdjustmentSummary BundleAdjust(const Intrinsics& intrinsics, std::vector<K
       }
       problem.SetManifold(pose.translation, new ceres::SubsetManifold(3, {largest}));
     }
-    if (options.share_focal) continue;
+    if (share) continue;
     if (options.refine_focal) {
       problem.AddResidualBlock(
           new ceres::AutoDiffCostFunction<FocalPriorCost, 1, 1>(
@@ -180,14 +182,10 @@ BundleAdjustmentSummary BundleAdjust(const Intrinsics& intrinsics, std::vector<K
     }
   }
 
-  if (options.share_focal && problem.HasParameterBlock(&shared_focal)) {
-    if (options.refine_focal) {
-      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<FocalPriorCost, 1, 1>(
-                                   new FocalPriorCost(shared_focal, options.focal_prior_weight)),
-                               nullptr, &shared_focal);
-    } else {
-      problem.SetParameterBlockConstant(&shared_focal);
-    }
+  if (share && problem.HasParameterBlock(&shared_focal)) {
+    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<FocalPriorCost, 1, 1>(
+                                 new FocalPriorCost(shared_focal, options.focal_prior_weight)),
+                             nullptr, &shared_focal);
   }
 
   ceres::Solver::Options solver_options;
@@ -206,7 +204,7 @@ BundleAdjustmentSummary BundleAdjust(const Intrinsics& intrinsics, std::vector<K
     keyframes[k].cam_from_submap =
         SE3(SO3(Eigen::Quaterniond(pose.rotation[3], pose.rotation[0], pose.rotation[1], pose.rotation[2])),
             Eigen::Vector3d(pose.translation[0], pose.translation[1], pose.translation[2]));
-    keyframes[k].focal = options.share_focal ? shared_focal : pose.focal;
+    keyframes[k].focal = share ? shared_focal : pose.focal;
   }
   summary.final_rms_pixels = RmsReprojection(intrinsics, keyframes, landmarks);
   summary.iterations = static_cast<int>(ceres_summary.iterations.size());

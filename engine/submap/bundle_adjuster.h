@@ -33,7 +33,8 @@ struct BundleAdjustmentOptions {
   // deviating from what the others agree on.
   double focal_prior_px = 0.0;
   // One focal length for all keyframes of the adjustment instead of one each (the paper), with
-  // the prior above on it; every keyframe gets the refined value. A single camera has a single
+  // the prior above on it; every keyframe gets the refined value (only with refine_focal:
+  // fixed focals stay each keyframe's own). A single camera has a single
   // focal: per-keyframe focals let each keyframe trade its focal against its distance to the
   // ground, which on low relief and slow parallax walks the estimate away (measured: a 640x360
   // oblique loop at 100 m over 15 m relief, started 10 % long, drifted to +38 % per keyframe).

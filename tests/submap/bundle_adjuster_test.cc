@@ -127,6 +127,16 @@ TEST(BundleAdjuster, FocalPriorIsCentredWhereTheOptionsSay) {
   }
 }
 
+TEST(BundleAdjuster, FixedFocalsStayEachKeyframesOwnEvenWhenShared) {
+  Scene s = MakeScene(520, 0.2, 7);
+  for (std::size_t k = 0; k < s.keyframes.size(); ++k) s.keyframes[k].focal = 520 + k;
+  BundleAdjustmentOptions options;
+  options.refine_focal = false;
+  options.share_focal = true;
+  BundleAdjust(s.intrinsics, s.keyframes, s.landmarks, options);
+  for (std::size_t k = 0; k < s.keyframes.size(); ++k) EXPECT_EQ(s.keyframes[k].focal, 520.0 + k);
+}
+
 TEST(BundleAdjuster, CancelledTokenThrows) {
   Scene s = MakeScene(500, 0.3, 4);
   CancellationToken cancel;
