@@ -6,6 +6,7 @@
 
 #include "engine/core/error.h"
 #include "engine/core/logging.h"
+#include "engine/core/median.h"
 #include "engine/core/options.h"
 #include "engine/features/feature_matcher.h"
 #include "engine/geometry/similarity_ransac.h"
@@ -36,9 +37,8 @@ double SubmapDepthScale(const Submap& submap) {
     for (const Eigen::Vector3d& c : centres) best = std::min(best, (lm.point_in_submap - c).norm());
     distances.push_back(best);
   }
-  auto mid = distances.begin() + static_cast<std::ptrdiff_t>(distances.size() / 2);
-  std::nth_element(distances.begin(), mid, distances.end());
-  return *mid > 0 && std::isfinite(*mid) ? *mid : 1.0;
+  const double median = UpperMedian(std::move(distances));
+  return median > 0 && std::isfinite(median) ? median : 1.0;
 }
 
 PairVerification VerifySubmapPair(const Submap& reference, const Submap& query,

@@ -8,6 +8,7 @@
 #include <Eigen/Geometry>
 
 #include "engine/core/logging.h"
+#include "engine/core/median.h"
 #include "engine/core/options.h"
 
 namespace glam {
@@ -58,9 +59,7 @@ LevelingResult LevelGround(const std::vector<Eigen::Vector3d>& points,
   std::vector<double> ranges;
   ranges.reserve(points.size());
   for (const auto& p : points) ranges.push_back((p - cam_mean).norm());
-  std::nth_element(ranges.begin(), ranges.begin() + static_cast<std::ptrdiff_t>(ranges.size() / 2),
-                   ranges.end());
-  const double threshold = options.inlier_fraction * std::max(ranges[ranges.size() / 2], 1e-12);
+  const double threshold = options.inlier_fraction * std::max(UpperMedian(std::move(ranges)), 1e-12);
 
   std::mt19937 rng(options.seed);
   std::uniform_int_distribution<int> pick(0, static_cast<int>(points.size()) - 1);

@@ -10,6 +10,7 @@
 #include <numeric>
 
 #include "engine/core/logging.h"
+#include "engine/core/median.h"
 #include "engine/features/feature_matcher.h"
 #include "engine/geometry/essential.h"
 #include "engine/geometry/triangulation.h"
@@ -31,12 +32,6 @@ struct TwoViewCandidate {
   double median_angle_deg = 0;
   double mean_angle_deg = 0;
 };
-
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
-}
 
 }  // namespace
 
@@ -83,7 +78,7 @@ bool SubmapBuilder::TryBootstrap() {
             TriangulationAngle(Eigen::Vector3d::Zero(), rel.cam2_from_cam1.Inverse().translation(), p) * kRadToDeg);
       }
       if (static_cast<int>(candidate.points.size()) >= options_.min_tracking_inliers) {
-        candidate.median_angle_deg = Median(candidate.angles_deg);
+        candidate.median_angle_deg = UpperMedian(candidate.angles_deg);
         candidate.mean_angle_deg =
             std::accumulate(candidate.angles_deg.begin(), candidate.angles_deg.end(), 0.0) /
             static_cast<double>(candidate.angles_deg.size());

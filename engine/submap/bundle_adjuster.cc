@@ -7,6 +7,7 @@
 #include <ceres/ceres.h>
 
 #include "engine/core/logging.h"
+#include "engine/core/median.h"
 #include "engine/core/options.h"
 
 namespace glam {
@@ -137,8 +138,7 @@ BundleAdjustmentSummary BundleAdjust(const Intrinsics& intrinsics, std::vector<K
   if (share && shared_focal <= 0) {
     std::vector<double> focals;
     for (const Keyframe& kf : keyframes) focals.push_back(kf.focal);
-    std::nth_element(focals.begin(), focals.begin() + static_cast<std::ptrdiff_t>(focals.size() / 2), focals.end());
-    shared_focal = focals[focals.size() / 2];
+    shared_focal = UpperMedian(std::move(focals));
   }
 
   // The problem owns cost, loss and manifold objects; Ceres reference-counts the shared loss.

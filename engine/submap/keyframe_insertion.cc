@@ -11,6 +11,7 @@
 #include <unordered_set>
 
 #include "engine/core/logging.h"
+#include "engine/core/median.h"
 #include "engine/features/feature_grid.h"
 #include "engine/features/feature_matcher.h"
 #include "engine/features/guided_matcher.h"
@@ -233,8 +234,7 @@ void SubmapBuilder::UpdateFocalEstimate() {
   std::vector<double> focals = completed_keyframe_focals_;
   for (const Keyframe& kf : open_.keyframes) focals.push_back(kf.focal);
   if (focals.empty()) return;
-  std::nth_element(focals.begin(), focals.begin() + static_cast<std::ptrdiff_t>(focals.size() / 2), focals.end());
-  focal_ = focals[focals.size() / 2];
+  focal_ = UpperMedian(std::move(focals));
 }
 
 }  // namespace glam

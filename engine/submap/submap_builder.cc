@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "engine/core/logging.h"
+#include "engine/core/median.h"
 
 namespace glam {
 namespace {
@@ -132,9 +133,7 @@ double SubmapBuilder::ParallaxToLastKeyframeDeg(const FrameRecord& frame) const 
       angles.push_back(std::acos(std::clamp(a.dot(b), -1.0, 1.0)) * 180.0 / M_PI);
     }
   }
-  if (angles.empty()) return 0;
-  std::nth_element(angles.begin(), angles.begin() + static_cast<std::ptrdiff_t>(angles.size() / 2), angles.end());
-  return angles[angles.size() / 2];
+  return UpperMedian(std::move(angles));
 }
 
 std::vector<Submap> SubmapBuilder::Finish() {
