@@ -313,6 +313,7 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   report.disconnected_submaps = report.submaps - exported.submaps_exported;
   report.points = exported.points;
   report.tracking_losses = stats.tracking_losses;
+  report.submap_rebuilds = stats.submap_rebuilds;
   report.revision = snapshot->revision;
   report.graph_edges = static_cast<std::int64_t>(aligner.edges().size());
   for (const AlignmentEdge& e : aligner.edges()) report.retrieved_edges += e.temporal ? 0 : 1;

@@ -82,6 +82,7 @@ nlohmann::json MappingReport::ToJson() const {
           {"disconnected_submaps", disconnected_submaps},
           {"points", points},
           {"tracking_losses", tracking_losses},
+          {"submap_rebuilds", submap_rebuilds},
           {"resumed_from_frame", resumed_from_frame},
           {"revision", revision},
           {"graph", {{"edges", graph_edges}, {"retrieved_edges", retrieved_edges}, {"landmarks", graph_landmarks}}},

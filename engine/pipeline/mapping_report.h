@@ -39,6 +39,7 @@ struct MappingReport {
   std::int64_t disconnected_submaps = 0;
   std::int64_t points = 0;
   std::int64_t tracking_losses = 0;
+  std::int64_t submap_rebuilds = 0;  // submaps tracked again after the focal estimate moved
   std::int64_t resumed_from_frame = -1;  // first frame mapped by this run when resumed
   std::int64_t revision = 0;             // of the final map
   std::int64_t graph_edges = 0;

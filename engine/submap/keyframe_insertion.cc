@@ -218,6 +218,7 @@ void SubmapBuilder::OptimiseAndFilter() {
   const Camera camera = CurrentCamera();
   BundleAdjustmentOptions ba = options_.bundle_adjustment;
   ba.focal_prior_px = focal_;  // the running median (see BundleAdjustmentOptions)
+  ba.focal_prior_weight *= 1.0 + options_.focal_prior_growth * static_cast<double>(completed_keyframe_focals_.size());
   const auto summary = BundleAdjust(camera.intrinsics(), open_.keyframes, open_.landmarks, ba, cancel_);
   stats_.bundle_adjust_seconds += summary.seconds;
   RemoveReprojectionOutliers(camera.intrinsics(), open_.keyframes, open_.landmarks, options_.outlier_filter);

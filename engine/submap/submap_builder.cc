@@ -68,6 +68,7 @@ std::vector<Submap> SubmapBuilder::AddFrame(std::int64_t index, double timestamp
 void SubmapBuilder::StartSubmapAt(std::deque<FrameRecord> frames) {
   open_ = OpenSubmap{};
   open_.frames = std::move(frames);
+  open_.start_focal = focal_;
   for (FrameRecord& f : open_.frames) {
     f.cam_from_submap.reset();
     f.landmark_matches.clear();
@@ -80,6 +81,7 @@ void SubmapBuilder::Process(FrameRecord record, std::vector<Submap>* completed) 
     // subset of a detection frame's keypoints); the frames in between are localised once the
     // bootstrap succeeds.
     const bool detected = record.detected;
+    if (open_.frames.empty()) open_.start_focal = focal_;
     open_.frames.push_back(std::move(record));
     if (detected || open_.frames.size() == 1) TryBootstrap();
     return;
@@ -118,8 +120,37 @@ void SubmapBuilder::Process(FrameRecord record, std::vector<Submap>* completed) 
 
   if (static_cast<int>(open_.keyframes.size()) >= options_.keyframes_per_submap ||
       static_cast<int>(open_.frames.size()) >= options_.max_frames_per_submap) {
-    HandOffOverlap(completed);
+    if (!RebuildIfFocalMoved(completed)) HandOffOverlap(completed);
   }
+}
+
+bool SubmapBuilder::RebuildIfFocalMoved(std::vector<Submap>* completed) {
+  if (!options_.bundle_adjustment.refine_focal || options_.rebuild_focal_change <= 0 ||
+      open_.rebuilds >= options_.max_submap_rebuilds || open_.start_focal <= 0) {
+    return false;
+  }
+  const double change = std::abs(focal_ - open_.start_focal) / open_.start_focal;
+  if (change <= options_.rebuild_focal_change) return false;
+  const int rebuilds = open_.rebuilds + 1;
+  ++stats_.submap_rebuilds;
+  GLAM_LOG_INFO("focal estimate moved {:.1f} % ({:.1f} -> {:.1f} px) since frame {}: tracking the "
+                "open submap's {} frames again (rebuild {})",
+                100.0 * change, open_.start_focal, focal_, open_.frames.front().index,
+                open_.frames.size(), rebuilds);
+  std::deque<FrameRecord> replay = std::move(open_.frames);
+  std::deque<FrameRecord> start;
+  start.push_back(std::move(replay.front()));
+  replay.pop_front();
+  StartSubmapAt(std::move(start));
+  open_.rebuilds = rebuilds;
+  // The replay goes through the normal per-frame path, so it may complete this submap (and
+  // even rebuild it again, up to the limit) before the current frame is reached.
+  for (FrameRecord& f : replay) {
+    f.cam_from_submap.reset();
+    f.landmark_matches.clear();
+    Process(std::move(f), completed);
+  }
+  return true;
 }
 
 double SubmapBuilder::ParallaxToLastKeyframeDeg(const FrameRecord& frame) const {

@@ -34,6 +34,7 @@ struct SubmapBuilderStats {
   std::int64_t submaps_completed = 0;
   std::int64_t submaps_discarded = 0;  // closed with < 3 keyframes
   std::int64_t tracking_losses = 0;
+  std::int64_t submap_rebuilds = 0;  // open submaps tracked again after a focal change
   double bundle_adjust_seconds = 0;
 };
 
@@ -77,6 +78,8 @@ class SubmapBuilder {
     int tau_stereo = 0;
     bool bootstrapped = false;
     std::size_t bootstrap_first = 0;  // position of the first keyframe candidate in `frames`
+    double start_focal = 0;           // focal estimate when this submap (or its rebuild) started
+    int rebuilds = 0;                 // times this submap was rebuilt (SubmapOptions)
   };
 
   void Process(FrameRecord record, std::vector<Submap>* completed);
@@ -87,6 +90,10 @@ class SubmapBuilder {
   // bootstrap.cc: returns true once the second keyframe exists.
   bool TryBootstrap();
   void StartSubmapAt(std::deque<FrameRecord> frames);
+  // At completion: re-tracks the open submap's frames from its first one at the current focal
+  // when the focal estimate moved by more than SubmapOptions::rebuild_focal_change since the
+  // submap started; the replay then completes it as usual. Returns whether it did.
+  bool RebuildIfFocalMoved(std::vector<Submap>* completed);
 
   // tracking.cc: poses `record` against the landmarks; false if tracking is lost.
   bool Track(FrameRecord& record);

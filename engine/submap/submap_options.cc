@@ -33,6 +33,9 @@ void SubmapOptions::Check() const {
   CheckGreater("SubmapOptions.max_new_point_reprojection_pixels", max_new_point_reprojection_pixels, 0.0);
   CheckGreaterEqual("SubmapOptions.max_frames_per_submap", max_frames_per_submap, 10);
   CheckGreaterEqual("SubmapOptions.completion_ba_max_frames", completion_ba_max_frames, 0);
+  CheckInRange("SubmapOptions.rebuild_focal_change", rebuild_focal_change, 0.0, 1.0);
+  CheckGreaterEqual("SubmapOptions.max_submap_rebuilds", max_submap_rebuilds, 0);
+  CheckGreaterEqual("SubmapOptions.focal_prior_growth", focal_prior_growth, 0.0);
   if (min_tracking_inliers >= tau_resection) {
     throw InputError("SubmapOptions.min_tracking_inliers must be below tau_resection");
   }

@@ -56,6 +56,26 @@ struct SubmapOptions {
   // keyframe count (keeps per-frame feature storage bounded on a hovering drone).
   int max_frames_per_submap = 1500;
 
+  // --- focal length (only when bundle_adjustment.refine_focal) ---
+  // Landmarks triangulated while the focal was far from the truth stay where that focal put
+  // them: bundle adjustment then settles in a bent solution although the focal itself ends
+  // right (measured on a 640x360 oblique loop at 100 m started 10 % long: trajectory error
+  // 25 m; tracked again at the settled focal: 0.13 m). So when a submap reaches its last
+  // keyframe and the running focal estimate has moved by more than this fraction since the
+  // submap started, its frames (features kept in memory) are tracked again from its first
+  // frame at the new focal, and it completes after that. Checked at completion, not at every
+  // keyframe: a few keyframes give a noisy estimate. 0 = never (the paper).
+  double rebuild_focal_change = 0.02;
+  // At most this many rebuilds per submap (the estimate usually settles after one).
+  int max_submap_rebuilds = 2;
+  // The focal prior's weight (bundle_adjustment.focal_prior_weight) is multiplied by
+  // 1 + focal_prior_growth * (keyframes of completed submaps): what earlier submaps agreed on
+  // is evidence a new submap should not overturn alone. Without it a short, weakly
+  // conditioned submap (measured: 4 keyframes at the end of a clip) moves the shared focal
+  // 16 % and maps its frames 3.7 m wrong. The first submap keeps the paper's weak prior;
+  // 0 = the weak prior throughout (the paper; lets the estimate follow a zoom).
+  double focal_prior_growth = 1.0;
+
   // --- completion ---
   // Before the final relocalisation, up to this many tracked (non-key) frames of the submap
   // join one last bundle adjustment with their PnP inlier matches as observations (focal

@@ -1,0 +1,52 @@
+// SubmapOptions::Check() accepts the defaults and names the option it rejects; the inlier
+// thresholds scale with the first keyframe's feature count as documented.
+#include <gtest/gtest.h>
+
+#include "engine/core/error.h"
+#include "engine/submap/submap_options.h"
+
+namespace glam {
+namespace {
+
+void ExpectRejected(const SubmapOptions& options, const std::string& name) {
+  try {
+    options.Check();
+    FAIL() << name << " accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+  }
+}
+
+TEST(SubmapOptions, DefaultsPass) { EXPECT_NO_THROW(SubmapOptions().Check()); }
+
+TEST(SubmapOptions, RejectsBadFocalOptions) {
+  SubmapOptions o;
+  o.rebuild_focal_change = -0.01;
+  ExpectRejected(o, "rebuild_focal_change");
+  o = {};
+  o.rebuild_focal_change = 1.5;
+  ExpectRejected(o, "rebuild_focal_change");
+  o = {};
+  o.max_submap_rebuilds = -1;
+  ExpectRejected(o, "max_submap_rebuilds");
+  o = {};
+  o.focal_prior_growth = -1;
+  ExpectRejected(o, "focal_prior_growth");
+  o = {};
+  o.rebuild_focal_change = 0;  // the paper: never rebuild
+  o.focal_prior_growth = 0;    // the paper: constant weak prior
+  EXPECT_NO_THROW(o.Check());
+}
+
+TEST(SubmapOptions, ThresholdsScaleWithTheFirstKeyframesFeatures) {
+  SubmapOptions o;
+  EXPECT_EQ(o.EffectiveTauResection(o.reference_features), o.tau_resection);
+  EXPECT_EQ(o.EffectiveTauStereo(2 * o.reference_features), o.tau_stereo);  // clamped at 1
+  EXPECT_EQ(o.EffectiveTauStereo(o.reference_features / 2), o.tau_stereo / 2);
+  // Never below 10 %, and resection always above the tracking-loss threshold.
+  EXPECT_EQ(o.EffectiveTauStereo(1), o.tau_stereo / 10);
+  EXPECT_GT(o.EffectiveTauResection(1), o.min_tracking_inliers);
+}
+
+}  // namespace
+}  // namespace glam
