@@ -145,12 +145,17 @@ bool SubmapBuilder::RebuildIfFocalMoved(std::vector<Submap>* completed) {
   open_.rebuilds = rebuilds;
   // The replay goes through the normal per-frame path, so it may complete this submap (and
   // even rebuild it again, up to the limit) before the current frame is reached.
-  for (FrameRecord& f : replay) {
+  Replay(std::move(replay), completed);
+  return true;
+}
+
+void SubmapBuilder::Replay(std::deque<FrameRecord> frames, std::vector<Submap>* completed) {
+  for (FrameRecord& f : frames) {
+    cancel_.ThrowIfCancelled();
     f.cam_from_submap.reset();
     f.landmark_matches.clear();
     Process(std::move(f), completed);
   }
-  return true;
 }
 
 double SubmapBuilder::ParallaxToLastKeyframeDeg(const FrameRecord& frame) const {
@@ -169,7 +174,10 @@ double SubmapBuilder::ParallaxToLastKeyframeDeg(const FrameRecord& frame) const 
 
 std::vector<Submap> SubmapBuilder::Finish() {
   std::vector<Submap> completed;
-  // End of input: give the open submap its best chance to be kept. A pending bootstrap takes
+  // End of input: a submap that never reached its last keyframe still gets the rebuild at the
+  // settled focal (a short clip is often one such submap).
+  if (open_.bootstrapped) RebuildIfFocalMoved(&completed);
+  // Then give the open submap its best chance to be kept. A pending bootstrap takes
   // the last frame as second keyframe if the parallax allows; a submap with fewer than three
   // keyframes makes its last tracked frame a keyframe.
   if (!open_.bootstrapped && open_.frames.size() >= 2) {
@@ -238,11 +246,7 @@ void SubmapBuilder::HandOffOverlap(std::vector<Submap>* completed) {
   std::deque<FrameRecord> start;
   start.push_back(std::move(first));
   StartSubmapAt(std::move(start));
-  for (FrameRecord& f : replay) {
-    f.cam_from_submap.reset();
-    f.landmark_matches.clear();
-    Process(std::move(f), completed);
-  }
+  Replay(std::move(replay), completed);
 }
 
 }  // namespace glam

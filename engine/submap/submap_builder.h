@@ -9,7 +9,9 @@
 // completed: all its frames are relocalised against the final landmarks, and the next submap
 // starts at the first frame of the last 10 % of this one's frames (replayed from memory), so
 // consecutive submaps share ground. Tracking loss closes the submap at the previous frame and
-// bootstraps a new one at the current frame.
+// bootstraps a new one at the current frame. When the focal is being estimated and the
+// estimate moved by more than 2 % while a submap was built, the submap is tracked again from
+// its first frame at the new focal before it completes (SubmapOptions::rebuild_focal_change).
 #pragma once
 
 #include <cstdint>
@@ -90,10 +92,13 @@ class SubmapBuilder {
   // bootstrap.cc: returns true once the second keyframe exists.
   bool TryBootstrap();
   void StartSubmapAt(std::deque<FrameRecord> frames);
-  // At completion: re-tracks the open submap's frames from its first one at the current focal
-  // when the focal estimate moved by more than SubmapOptions::rebuild_focal_change since the
-  // submap started; the replay then completes it as usual. Returns whether it did.
+  // At completion (and at the end of input): re-tracks the open submap's frames from its first
+  // one at the current focal when the focal estimate moved by more than
+  // SubmapOptions::rebuild_focal_change since the submap started; the replay then goes on as
+  // usual (and completes it). Returns whether it did.
   bool RebuildIfFocalMoved(std::vector<Submap>* completed);
+  // Feeds frames kept in memory through Process() again, forgetting their earlier poses.
+  void Replay(std::deque<FrameRecord> frames, std::vector<Submap>* completed);
 
   // tracking.cc: poses `record` against the landmarks; false if tracking is lost.
   bool Track(FrameRecord& record);

@@ -61,10 +61,10 @@ struct SubmapOptions {
   // them: bundle adjustment then settles in a bent solution although the focal itself ends
   // right (measured on a 640x360 oblique loop at 100 m started 10 % long: trajectory error
   // 25 m; tracked again at the settled focal: 0.13 m). So when a submap reaches its last
-  // keyframe and the running focal estimate has moved by more than this fraction since the
-  // submap started, its frames (features kept in memory) are tracked again from its first
-  // frame at the new focal, and it completes after that. Checked at completion, not at every
-  // keyframe: a few keyframes give a noisy estimate. 0 = never (the paper).
+  // keyframe (or the input ends) and the running focal estimate has moved by more than this
+  // fraction since the submap started, its frames (features kept in memory) are tracked again
+  // from its first frame at the new focal, and it completes after that. Checked at completion,
+  // not at every keyframe: a few keyframes give a noisy estimate. 0 = never (the paper).
   double rebuild_focal_change = 0.02;
   // At most this many rebuilds per submap (the estimate usually settles after one).
   int max_submap_rebuilds = 2;
