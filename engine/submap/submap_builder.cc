@@ -137,19 +137,19 @@ bool SubmapBuilder::RebuildIfFocalMoved(std::vector<Submap>* completed) {
                 "open submap's {} frames again (rebuild {})",
                 100.0 * change, open_.start_focal, focal_, open_.frames.front().index,
                 open_.frames.size(), rebuilds);
-  std::deque<FrameRecord> replay = std::move(open_.frames);
-  std::deque<FrameRecord> start;
-  start.push_back(std::move(replay.front()));
-  replay.pop_front();
-  StartSubmapAt(std::move(start));
-  open_.rebuilds = rebuilds;
   // The replay goes through the normal per-frame path, so it may complete this submap (and
   // even rebuild it again, up to the limit) before the current frame is reached.
-  Replay(std::move(replay), completed);
+  RestartWith(std::move(open_.frames), rebuilds, completed);
   return true;
 }
 
-void SubmapBuilder::Replay(std::deque<FrameRecord> frames, std::vector<Submap>* completed) {
+void SubmapBuilder::RestartWith(std::deque<FrameRecord> frames, int rebuilds,
+                                std::vector<Submap>* completed) {
+  std::deque<FrameRecord> start;
+  start.push_back(std::move(frames.front()));
+  frames.pop_front();
+  StartSubmapAt(std::move(start));
+  open_.rebuilds = rebuilds;
   for (FrameRecord& f : frames) {
     cancel_.ThrowIfCancelled();
     f.cam_from_submap.reset();
@@ -241,12 +241,7 @@ void SubmapBuilder::HandOffOverlap(std::vector<Submap>* completed) {
   std::deque<FrameRecord> replay(open_.frames.begin() + static_cast<std::ptrdiff_t>(first_position), open_.frames.end());
   completed->push_back(Complete());
   // The next submap bootstraps from the overlap's first frame and re-tracks the rest.
-  FrameRecord first = std::move(replay.front());
-  replay.pop_front();
-  std::deque<FrameRecord> start;
-  start.push_back(std::move(first));
-  StartSubmapAt(std::move(start));
-  Replay(std::move(replay), completed);
+  RestartWith(std::move(replay), 0, completed);
 }
 
 }  // namespace glam

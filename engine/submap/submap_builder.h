@@ -97,8 +97,10 @@ class SubmapBuilder {
   // SubmapOptions::rebuild_focal_change since the submap started; the replay then goes on as
   // usual (and completes it). Returns whether it did.
   bool RebuildIfFocalMoved(std::vector<Submap>* completed);
-  // Feeds frames kept in memory through Process() again, forgetting their earlier poses.
-  void Replay(std::deque<FrameRecord> frames, std::vector<Submap>* completed);
+  // Starts a new open submap at frames.front() (its `rebuilds` count set) and feeds the other
+  // frames, kept in memory, through Process() again, forgetting their earlier poses. Shared by
+  // the overlap hand-off and the rebuild.
+  void RestartWith(std::deque<FrameRecord> frames, int rebuilds, std::vector<Submap>* completed);
 
   // tracking.cc: poses `record` against the landmarks; false if tracking is lost.
   bool Track(FrameRecord& record);
