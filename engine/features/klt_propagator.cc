@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
 #include "engine/core/error.h"
@@ -19,8 +20,37 @@ void KltOptions::Check() const {
   CheckGreaterEqual("KltOptions.min_eigen_value", min_eigen_value, 0.0);
   CheckGreaterEqual("KltOptions.border_px", border_px, 0.0);
   CheckGreaterEqual("KltOptions.max_forward_backward_px", max_forward_backward_px, 0.0);
+  CheckInRange("KltOptions.min_patch_correlation", min_patch_correlation, -1.0, 1.0);
   CheckInRange("KltOptions.min_survival_fraction", min_survival_fraction, 0.0, 1.0);
 }
+
+namespace {
+
+// Normalised cross-correlation of the `window` patches around a (in image_a) and b (in
+// image_b), sampled bilinearly; -1 when either patch is flat.
+double PatchCorrelation(const cv::Mat& image_a, cv::Point2f a, const cv::Mat& image_b, cv::Point2f b,
+                        cv::Size window) {
+  cv::Mat pa, pb;
+  cv::getRectSubPix(image_a, window, a, pa, CV_32F);
+  cv::getRectSubPix(image_b, window, b, pb, CV_32F);
+  const double n = static_cast<double>(window.area());
+  const double mean_a = cv::sum(pa)[0] / n, mean_b = cv::sum(pb)[0] / n;
+  double ab = 0, aa = 0, bb = 0;
+  for (int r = 0; r < window.height; ++r) {
+    const float* ra = pa.ptr<float>(r);
+    const float* rb = pb.ptr<float>(r);
+    for (int c = 0; c < window.width; ++c) {
+      const double da = ra[c] - mean_a, db = rb[c] - mean_b;
+      ab += da * db;
+      aa += da * da;
+      bb += db * db;
+    }
+  }
+  if (aa <= 1e-6 * n || bb <= 1e-6 * n) return -1;
+  return ab / std::sqrt(aa * bb);
+}
+
+}  // namespace
 
 KltPropagator::KltPropagator(const KltOptions& options)
     : options_(options), window_(options.window_px, options.window_px) {
@@ -32,6 +62,7 @@ void KltPropagator::SetReference(const cv::Mat& gray, const Features& features) 
   GLAM_CHECK(features.descriptors.rows == static_cast<int>(features.size()) &&
              features.colors.size() == features.size());
   reference_pyramid_.clear();
+  reference_gray_ = gray.clone();
   cv::buildOpticalFlowPyramid(gray, reference_pyramid_, window_, options_.pyramid_levels, true);
   reference_ = features;
   reference_.descriptors = features.descriptors.clone();
@@ -65,7 +96,7 @@ Features KltPropagator::Propagate(const cv::Mat& gray) {
                            options_.pyramid_levels, criteria, cv::OPTFLOW_USE_INITIAL_FLOW,
                            options_.min_eigen_value);
 
-  std::vector<unsigned char> back_ok(alive_.size(), 1);
+  std::vector<unsigned char> passes(alive_.size(), 1);  // the wrong-track tests
   if (options_.max_forward_backward_px > 0) {
     std::vector<cv::Point2f> back = from;
     std::vector<unsigned char> back_status;
@@ -75,7 +106,14 @@ Features KltPropagator::Propagate(const cv::Mat& gray) {
                              options_.min_eigen_value);
     for (std::size_t i = 0; i < alive_.size(); ++i) {
       const cv::Point2f d = back[i] - from[i];
-      back_ok[i] = back_status[i] && std::hypot(d.x, d.y) <= options_.max_forward_backward_px;
+      passes[i] = back_status[i] && std::hypot(d.x, d.y) <= options_.max_forward_backward_px;
+    }
+  }
+
+  if (options_.min_patch_correlation > -1) {
+    for (std::size_t i = 0; i < alive_.size(); ++i) {
+      if (!status[i] || !passes[i] || !std::isfinite(to[i].x) || !std::isfinite(to[i].y)) continue;
+      passes[i] = PatchCorrelation(reference_gray_, from[i], gray, to[i], window_) >= options_.min_patch_correlation;
     }
   }
 
@@ -86,7 +124,7 @@ Features KltPropagator::Propagate(const cv::Mat& gray) {
   std::vector<cv::Point2f> survivor_positions;
   for (std::size_t i = 0; i < alive_.size(); ++i) {
     const cv::Point2f& p = to[i];
-    if (!status[i] || !back_ok[i] || !(error[i] <= options_.max_patch_error) || !std::isfinite(p.x) ||
+    if (!status[i] || !passes[i] || !(error[i] <= options_.max_patch_error) || !std::isfinite(p.x) ||
         !std::isfinite(p.y) || p.x < border || p.y < border || p.x > max_x || p.y > max_y) {
       continue;
     }

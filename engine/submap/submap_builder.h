@@ -104,7 +104,9 @@ class SubmapBuilder {
 
   // tracking.cc: poses `record` against the landmarks; false if tracking is lost.
   bool Track(FrameRecord& record);
-  bool Localise(FrameRecord& record, const std::optional<SE3>& predicted) const;
+  // `predicted` is taken by value: callers pass record.cam_from_submap itself (relocalisation
+  // from the tracked pose), which Localise clears first.
+  bool Localise(FrameRecord& record, std::optional<SE3> predicted) const;
   std::optional<SE3> PredictPose() const;
 
   // keyframe_insertion.cc

@@ -41,7 +41,7 @@ bool SubmapBuilder::Track(FrameRecord& record) {
   return Localise(record, std::nullopt);
 }
 
-bool SubmapBuilder::Localise(FrameRecord& record, const std::optional<SE3>& predicted) const {
+bool SubmapBuilder::Localise(FrameRecord& record, std::optional<SE3> predicted) const {
   record.cam_from_submap.reset();
   record.landmark_matches.clear();
   if (record.features.size() == 0 || open_.landmarks.empty()) return false;

@@ -87,11 +87,12 @@ TEST(KltPropagator, TracksEveryFrameFromTheReferenceWithoutDrift) {
   EXPECT_LT(errors[errors.size() / 2], 0.1);
 }
 
-TEST(KltPropagator, DropsPointsThatLeaveTheImageOrChangeAppearance) {
+// Moves the scene 40 px right, paints the right half with unrelated texture, and checks that
+// the tracks there are rejected by the wrong-track test of `options`.
+void ExpectLeavingAndReplacedPointsDropped(const KltOptions& options) {
   const Scene scene;
-  KltPropagator klt;
+  KltPropagator klt(options);
   klt.SetReference(Gray(scene.bgr), scene.features);
-  // Move 40 px right and paint the right half with unrelated texture.
   cv::Mat next = Shifted(scene.bgr, 40, 0);
   RandomTexture({320, 360}, 99).copyTo(next(cv::Rect(320, 0, 320, 360)));
   const Features moved = klt.Propagate(Gray(next));
@@ -109,12 +110,43 @@ TEST(KltPropagator, DropsPointsThatLeaveTheImageOrChangeAppearance) {
   EXPECT_LE(back.size(), moved.size());
 }
 
+TEST(KltPropagator, DropsPointsThatLeaveTheImageOrChangeAppearance) {
+  ExpectLeavingAndReplacedPointsDropped(KltOptions{});  // default: patch correlation
+}
+
+TEST(KltPropagator, ForwardBackwardCheckAlsoDropsReplacedPoints) {
+  KltOptions fb;
+  fb.min_patch_correlation = -1;
+  fb.max_forward_backward_px = 0.5;
+  ExpectLeavingAndReplacedPointsDropped(fb);
+}
+
+TEST(KltPropagator, WithoutAWrongTrackTestReplacedPointsSurvive) {
+  // The two tests above are not vacuous: with neither check, the patch-error guard alone lets
+  // many tracks on the replaced half through (smooth random texture differs little per pixel).
+  const Scene scene;
+  KltOptions none;
+  none.min_patch_correlation = -1;
+  none.max_forward_backward_px = 0;
+  KltPropagator klt(none);
+  klt.SetReference(Gray(scene.bgr), scene.features);
+  cv::Mat next = Shifted(scene.bgr, 40, 0);
+  RandomTexture({320, 360}, 99).copyTo(next(cv::Rect(320, 0, 320, 360)));
+  const Features moved = klt.Propagate(Gray(next));
+  std::size_t right = 0;
+  for (const cv::KeyPoint& kp : moved.keypoints) right += kp.pt.x > 340 ? 1 : 0;
+  EXPECT_GT(right, moved.size() / 10);
+}
+
 TEST(KltPropagator, OptionsAreChecked) {
   KltOptions o;
   o.window_px = 14;
   EXPECT_THROW(o.Check(), InputError);
   o = {};
   o.min_survival_fraction = 1.5;
+  EXPECT_THROW(o.Check(), InputError);
+  o = {};
+  o.min_patch_correlation = 1.5;
   EXPECT_THROW(o.Check(), InputError);
   EXPECT_NO_THROW(KltOptions{}.Check());
 }
