@@ -87,55 +87,61 @@ TEST(KltPropagator, TracksEveryFrameFromTheReferenceWithoutDrift) {
   EXPECT_LT(errors[errors.size() / 2], 0.1);
 }
 
-// Moves the scene 40 px right, paints the right half with unrelated texture, and checks that
-// the tracks there are rejected by the wrong-track test of `options`.
-void ExpectLeavingAndReplacedPointsDropped(const KltOptions& options) {
+// The scene moved 40 px right with its right half painted over by unrelated texture, tracked
+// with `options`.
+struct ReplacedHalf {
+  std::size_t expected_left = 0;  // reference keypoints that stay visible on the left half
+  std::size_t kept = 0;           // tracks returned
+  std::size_t kept_right = 0;     // ... of them on the replaced half (all wrong)
+  std::size_t near_border = 0;    // ... closer than 2 px to the left border
+  std::size_t back = 0;           // tracks returned when the reference image is shown again
+};
+
+ReplacedHalf TrackIntoReplacedHalf(const KltOptions& options) {
   const Scene scene;
   KltPropagator klt(options);
   klt.SetReference(Gray(scene.bgr), scene.features);
   cv::Mat next = Shifted(scene.bgr, 40, 0);
   RandomTexture({320, 360}, 99).copyTo(next(cv::Rect(320, 0, 320, 360)));
   const Features moved = klt.Propagate(Gray(next));
-  std::size_t expected_left = 0;
-  for (const cv::KeyPoint& kp : scene.features.keypoints) expected_left += kp.pt.x + 40 < 300 ? 1 : 0;
-  std::size_t right = 0;
+  ReplacedHalf r;
+  for (const cv::KeyPoint& kp : scene.features.keypoints) r.expected_left += kp.pt.x + 40 < 300 ? 1 : 0;
+  r.kept = moved.size();
   for (const cv::KeyPoint& kp : moved.keypoints) {
-    EXPECT_GE(kp.pt.x, 2.0f);
-    right += kp.pt.x > 340 ? 1 : 0;
+    r.near_border += kp.pt.x < 2.0f ? 1 : 0;
+    r.kept_right += kp.pt.x > 340 ? 1 : 0;
   }
-  EXPECT_GT(moved.size(), expected_left * 9 / 10);
-  EXPECT_LT(right, moved.size() / 20);  // the replaced half keeps almost nothing
+  r.back = klt.Propagate(Gray(scene.bgr)).size();
+  return r;
+}
+
+void ExpectReplacedHalfDropped(const ReplacedHalf& r) {
+  EXPECT_EQ(r.near_border, 0u);
+  EXPECT_GT(r.kept, r.expected_left * 9 / 10);
+  EXPECT_LT(r.kept_right, r.kept / 20);  // the replaced half keeps almost nothing
   // Lost points stay lost: back to the reference image, only the survivors return.
-  const Features back = klt.Propagate(Gray(scene.bgr));
-  EXPECT_LE(back.size(), moved.size());
+  EXPECT_LE(r.back, r.kept);
 }
 
 TEST(KltPropagator, DropsPointsThatLeaveTheImageOrChangeAppearance) {
-  ExpectLeavingAndReplacedPointsDropped(KltOptions{});  // default: patch correlation
+  ExpectReplacedHalfDropped(TrackIntoReplacedHalf(KltOptions{}));  // default: patch correlation
 }
 
 TEST(KltPropagator, ForwardBackwardCheckAlsoDropsReplacedPoints) {
   KltOptions fb;
   fb.min_patch_correlation = -1;
   fb.max_forward_backward_px = 0.5;
-  ExpectLeavingAndReplacedPointsDropped(fb);
+  ExpectReplacedHalfDropped(TrackIntoReplacedHalf(fb));
 }
 
 TEST(KltPropagator, WithoutAWrongTrackTestReplacedPointsSurvive) {
   // The two tests above are not vacuous: with neither check, the patch-error guard alone lets
   // many tracks on the replaced half through (smooth random texture differs little per pixel).
-  const Scene scene;
   KltOptions none;
   none.min_patch_correlation = -1;
   none.max_forward_backward_px = 0;
-  KltPropagator klt(none);
-  klt.SetReference(Gray(scene.bgr), scene.features);
-  cv::Mat next = Shifted(scene.bgr, 40, 0);
-  RandomTexture({320, 360}, 99).copyTo(next(cv::Rect(320, 0, 320, 360)));
-  const Features moved = klt.Propagate(Gray(next));
-  std::size_t right = 0;
-  for (const cv::KeyPoint& kp : moved.keypoints) right += kp.pt.x > 340 ? 1 : 0;
-  EXPECT_GT(right, moved.size() / 10);
+  const ReplacedHalf r = TrackIntoReplacedHalf(none);
+  EXPECT_GT(r.kept_right, r.kept / 10);
 }
 
 TEST(KltPropagator, OptionsAreChecked) {
