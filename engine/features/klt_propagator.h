@@ -53,8 +53,9 @@ struct KltOptions {
   //    keypoints survive and the trajectories are unchanged (docs/benchmarks.md). -1 = off.
   //  * Forward-backward: every point is tracked back to the detection frame and dropped if it
   //    does not return within this distance (pixels; correct tracks return to ~0.05 px; 22 of
-  //    the 800 above passed at 0.5 px, 44 at 1 px). It doubles the cost of KLT (640x360, 1800
-  //    points: 30 ms per frame against 17 ms without it, one core). 0 = off.
+  //    the 800 above passed at 0.5 px, 44 at 1 px). It doubles the cost of KLT (640x360, ~1800
+  //    points, one core: 27 ms per frame against 18 ms with the correlation test instead;
+  //    glam_bench_feature_stage). 0 = off.
   double min_patch_correlation = 0.9;
   double max_forward_backward_px = 0;
   // Used by the feature stage (DecoderWorker): when fewer than this fraction of the detection
