@@ -45,19 +45,22 @@ struct KltOptions {
   double border_px = 2.0;
   // Wrong-track tests (either, both or none). Where a texture replaced the tracked ground, 600
   // of 800 tracks passed the patch-error test above alone.
-  //  * Patch correlation (default): the normalised cross-correlation of the track's window in
-  //    the detection frame and in this frame (finest level, bilinear) must reach this;
-  //    contrast-independent, ~2 us per point. At 0.9 the replaced-texture case keeps about as
-  //    few tracks as the forward-backward check (0.8 lets three times as many through: smooth
-  //    texture correlates well after LK aligned it), and on the benchmark videos as many
-  //    keypoints survive and the trajectories are unchanged (docs/benchmarks.md). -1 = off.
-  //  * Forward-backward: every point is tracked back to the detection frame and dropped if it
-  //    does not return within this distance (pixels; correct tracks return to ~0.05 px; 22 of
-  //    the 800 above passed at 0.5 px, 44 at 1 px). It doubles the cost of KLT (640x360, ~1800
-  //    points, one core: 27 ms per frame against 18 ms with the correlation test instead;
-  //    glam_bench_feature_stage). 0 = off.
-  double min_patch_correlation = 0.9;
-  double max_forward_backward_px = 0;
+  //  * Forward-backward (default): every point is tracked back to the detection frame and
+  //    dropped if it does not return within this distance (pixels; correct tracks return to
+  //    ~0.05 px; 22 of the 800 above passed at 0.5 px, 44 at 1 px). 0 = off. It doubles the
+  //    cost of KLT (640x360, ~1800 points, one core: 27 ms per frame against 18 ms with the
+  //    correlation test instead; glam_bench_feature_stage).
+  //  * Patch correlation: the normalised cross-correlation of the track's window in the
+  //    detection frame and in this frame (finest level, bilinear) must reach this; ~2 us per
+  //    point. At 0.9 it rejects as many wrong tracks on the replaced-texture test (0.8 lets
+  //    three times as many through: smooth texture correlates well once LK aligned it) and
+  //    leaves calibrated runs as accurate (docs/benchmarks.md), but it was tried as the default
+  //    and dropped: it also drops the tracks whose window deforms most under perspective, at
+  //    the image edges of oblique views, which are the rays that pin the focal length, and
+  //    uncalibrated runs converged less often (bench/focal_range.sh: 17 of 23 starts within
+  //    1 % against 19 of 23; a clip that converged from +10 % ended 3 % off). -1 = off.
+  double max_forward_backward_px = 0.5;
+  double min_patch_correlation = -1;
   // Used by the feature stage (DecoderWorker): when fewer than this fraction of the detection
   // frame's keypoints are still tracked (fast motion, a cut, ground leaving the view), the
   // frame gets SIFT itself and becomes the new reference instead of waiting for the next

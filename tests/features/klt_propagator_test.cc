@@ -124,14 +124,14 @@ void ExpectReplacedHalfDropped(const ReplacedHalf& r) {
 }
 
 TEST(KltPropagator, DropsPointsThatLeaveTheImageOrChangeAppearance) {
-  ExpectReplacedHalfDropped(TrackIntoReplacedHalf(KltOptions{}));  // default: patch correlation
+  ExpectReplacedHalfDropped(TrackIntoReplacedHalf(KltOptions{}));  // default: forward-backward
 }
 
-TEST(KltPropagator, ForwardBackwardCheckAlsoDropsReplacedPoints) {
-  KltOptions fb;
-  fb.min_patch_correlation = -1;
-  fb.max_forward_backward_px = 0.5;
-  ExpectReplacedHalfDropped(TrackIntoReplacedHalf(fb));
+TEST(KltPropagator, PatchCorrelationCheckAlsoDropsReplacedPoints) {
+  KltOptions ncc;
+  ncc.max_forward_backward_px = 0;
+  ncc.min_patch_correlation = 0.9;
+  ExpectReplacedHalfDropped(TrackIntoReplacedHalf(ncc));
 }
 
 TEST(KltPropagator, WithoutAWrongTrackTestReplacedPointsSurvive) {
