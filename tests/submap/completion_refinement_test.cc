@@ -10,10 +10,10 @@
 // exact track set. Measured map medians, completion BA against PnP only: 0.534 vs 0.685 m with
 // the forward-backward KLT check (the default), 0.435 vs 0.411 m with the patch-correlation
 // check (an option); on the benchmark videos (20 keyframes per submap, patch-correlation
-// check) the completion BA lowers the map
-// median on the lawnmower (0.115 vs 0.245 m) and oblique (0.142 vs 0.152 m) videos and leaves
-// the loop about equal (0.094 vs 0.087 m); it lowers the ATE on the lawnmower (0.116 vs
-// 0.161 m) and loop (0.161 vs 0.206 m) and raises it on the oblique video (0.112 vs 0.096 m).
+// check) the completion BA lowers the map median on the lawnmower (0.115 vs 0.245 m) and
+// oblique (0.142 vs 0.152 m) videos and leaves the loop about equal (0.094 vs 0.087 m); it
+// lowers the ATE on the lawnmower (0.116 vs 0.161 m) and loop (0.161 vs 0.206 m) and raises it
+// on the oblique video (0.112 vs 0.096 m).
 #include <algorithm>
 #include <cstdio>
 
