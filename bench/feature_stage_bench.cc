@@ -33,13 +33,12 @@ double Ms(Clock::time_point start) {
 
 struct Variant {
   std::string name;
-  KltOptions options;
   double ms = 0;
   double survivors = 0;
   double position_error_sum = 0;  // against the default variant, same keypoint
   std::size_t compared = 0;
   KltPropagator klt;
-  explicit Variant(std::string n, const KltOptions& o) : name(std::move(n)), options(o), klt(o) {}
+  Variant(std::string n, const KltOptions& options) : name(std::move(n)), klt(options) {}
 };
 
 int Run(int argc, char** argv) {

@@ -62,7 +62,6 @@ void KltPropagator::SetReference(const cv::Mat& gray, const Features& features) 
   GLAM_CHECK(features.descriptors.rows == static_cast<int>(features.size()) &&
              features.colors.size() == features.size());
   reference_pyramid_.clear();
-  reference_gray_ = gray.clone();
   cv::buildOpticalFlowPyramid(gray, reference_pyramid_, window_, options_.pyramid_levels, true);
   reference_ = features;
   reference_.descriptors = features.descriptors.clone();
@@ -113,7 +112,7 @@ Features KltPropagator::Propagate(const cv::Mat& gray) {
   if (options_.min_patch_correlation > -1) {
     for (std::size_t i = 0; i < alive_.size(); ++i) {
       if (!status[i] || !passes[i] || !std::isfinite(to[i].x) || !std::isfinite(to[i].y)) continue;
-      passes[i] = PatchCorrelation(reference_gray_, from[i], gray, to[i], window_) >= options_.min_patch_correlation;
+      passes[i] = PatchCorrelation(reference_pyramid_[0], from[i], gray, to[i], window_) >= options_.min_patch_correlation;
     }
   }
 

@@ -89,8 +89,7 @@ class KltPropagator {
  private:
   KltOptions options_;
   cv::Size window_;
-  std::vector<cv::Mat> reference_pyramid_;
-  cv::Mat reference_gray_;
+  std::vector<cv::Mat> reference_pyramid_;  // level 0 (index 0) is the reference image
   Features reference_;
   std::vector<int> alive_;                 // reference indices still tracked
   std::vector<cv::Point2f> last_position_;  // their positions in the last propagated frame

@@ -150,9 +150,8 @@ bool SubmapBuilder::TryBootstrap() {
                  candidate.median_angle_deg);
 
   // Frames between the two keyframes are localised against the new landmarks in order, each
-  // from a constant-velocity prediction off the two frames before it (the first from the pose
-  // interpolated between the keyframes): guided matching, and matching against all landmarks
-  // (~25-70 ms per frame) only where that fails. Frames after the second keyframe (a past best
+  // guided first by a constant-velocity prediction off the two frames before it (the first by
+  // the pose interpolated between the keyframes). Frames after the second keyframe (a past best
   // candidate) are tracked in order.
   const SE3 cam1_from_submap = *open_.frames[kf1_position].cam_from_submap;  // submap = cam0
   for (std::size_t p = 1; p < open_.frames.size(); ++p) {
@@ -162,13 +161,13 @@ bool SubmapBuilder::TryBootstrap() {
       SE3 predicted;
       const auto& previous = open_.frames[p - 1].cam_from_submap;
       if (p >= 2 && previous && open_.frames[p - 2].cam_from_submap) {
-        predicted = (*previous * open_.frames[p - 2].cam_from_submap->Inverse()) * *previous;
+        predicted = ExtrapolateConstantVelocity(*open_.frames[p - 2].cam_from_submap, *previous);
       } else {
         const double t = static_cast<double>(p) / static_cast<double>(kf1_position);
         const SO3 rotation = SO3::Exp(t * cam1_from_submap.rotation().Log());
         predicted = SE3(rotation, -(rotation * (t * CameraCenter(cam1_from_submap))));
       }
-      if (!Localise(f, predicted)) Localise(f, std::nullopt);
+      LocaliseGuidedFirst(f, predicted);
     } else if (Track(f)) {
       ++stats_.frames_tracked;
     }

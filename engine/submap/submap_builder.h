@@ -107,7 +107,12 @@ class SubmapBuilder {
   // `predicted` is taken by value: callers pass record.cam_from_submap itself (relocalisation
   // from the tracked pose), which Localise clears first.
   bool Localise(FrameRecord& record, std::optional<SE3> predicted) const;
+  // Guided from `predicted` (when given), then against all landmarks (25-70 ms per frame) only
+  // if that fails.
+  bool LocaliseGuidedFirst(FrameRecord& record, std::optional<SE3> predicted) const;
+  // Constant-velocity prediction from the newest posed frames before the one being tracked.
   std::optional<SE3> PredictPose() const;
+  static SE3 ExtrapolateConstantVelocity(const SE3& cam_before_from_submap, const SE3& cam_last_from_submap);
 
   // keyframe_insertion.cc
   void InsertKeyframes(std::size_t current_position);

@@ -103,9 +103,8 @@ void SubmapBuilder::RelocaliseFrames(const std::vector<bool>& keep) {
       }
     }
     if (static_cast<int>(points.size()) < options_.min_tracking_inliers) {
-      // Too few surviving matches: match the final landmarks again, guided by the tracked pose,
-      // then against all landmarks if that fails.
-      if (!Localise(frame, frame.cam_from_submap)) Localise(frame, std::nullopt);
+      // Too few surviving matches: match the final landmarks again, guided by the tracked pose.
+      LocaliseGuidedFirst(frame, frame.cam_from_submap);
       continue;
     }
     const RansacResult<SE3> result = EstimateAbsolutePose(pixels, points, camera, pnp);

@@ -30,14 +30,20 @@ std::optional<SE3> SubmapBuilder::PredictPose() const {
   }
   if (last == nullptr) return std::nullopt;
   if (before == nullptr) return last->cam_from_submap;
-  // cam_last_from_cam_before, applied once more (scaled to the frame gap would need
-  // interpolation on SE3; gaps are equal at a fixed stride).
-  const SE3 motion = *last->cam_from_submap * before->cam_from_submap->Inverse();
-  return motion * *last->cam_from_submap;
+  return ExtrapolateConstantVelocity(*before->cam_from_submap, *last->cam_from_submap);
 }
 
-bool SubmapBuilder::Track(FrameRecord& record) {
-  if (Localise(record, PredictPose())) return true;
+SE3 SubmapBuilder::ExtrapolateConstantVelocity(const SE3& cam_before_from_submap, const SE3& cam_last_from_submap) {
+  // cam_last_from_cam_before, applied once more (scaled to the frame gap would need
+  // interpolation on SE3; gaps are equal at a fixed stride).
+  const SE3 cam_last_from_cam_before = cam_last_from_submap * cam_before_from_submap.Inverse();
+  return cam_last_from_cam_before * cam_last_from_submap;
+}
+
+bool SubmapBuilder::Track(FrameRecord& record) { return LocaliseGuidedFirst(record, PredictPose()); }
+
+bool SubmapBuilder::LocaliseGuidedFirst(FrameRecord& record, std::optional<SE3> predicted) const {
+  if (predicted && Localise(record, predicted)) return true;
   return Localise(record, std::nullopt);
 }
 
