@@ -98,6 +98,7 @@ void SubmapBuilder::Process(FrameRecord record, std::vector<Submap>* completed) 
     } else {
       ++stats_.submaps_discarded;
     }
+    previous_tail_.clear();  // no shared ground with the next submap
     std::deque<FrameRecord> restart;
     restart.push_back(std::move(lost));
     StartSubmapAt(std::move(restart));
@@ -118,7 +119,7 @@ void SubmapBuilder::Process(FrameRecord record, std::vector<Submap>* completed) 
     InsertKeyframes(open_.frames.size() - 1);
   }
 
-  if (static_cast<int>(open_.keyframes.size()) >= options_.keyframes_per_submap ||
+  if ((!extending_tail_ && static_cast<int>(open_.keyframes.size()) >= options_.keyframes_per_submap) ||
       static_cast<int>(open_.frames.size()) >= options_.max_frames_per_submap) {
     if (!RebuildIfFocalMoved(completed)) HandOffOverlap(completed);
   }
@@ -174,6 +175,30 @@ double SubmapBuilder::ParallaxToLastKeyframeDeg(const FrameRecord& frame) const 
 
 std::vector<Submap> SubmapBuilder::Finish() {
   std::vector<Submap> completed;
+  if (options_.extend_short_final_submap && open_.bootstrapped && !previous_tail_.empty() &&
+      static_cast<int>(open_.keyframes.size()) < options_.keyframes_per_submap) {
+    // Tracked again from the previous submap's middle keyframe, at the current focal (so the
+    // focal rebuild below has nothing left to do).
+    GLAM_LOG_INFO("end of input: submap with {} keyframes extended back to frame {}",
+                  open_.keyframes.size(), previous_tail_.front().index);
+    std::deque<FrameRecord> frames = std::move(previous_tail_);
+    previous_tail_.clear();
+    for (FrameRecord& f : open_.frames) frames.push_back(std::move(f));
+    extending_tail_ = true;
+    RestartWith(std::move(frames), open_.rebuilds, &completed);
+    extending_tail_ = false;
+    // The ground seen after the last keyframe is mapped too: the last tracked frame becomes a
+    // keyframe when its parallax allows triangulating.
+    if (open_.bootstrapped && !open_.keyframe_frame_positions.empty()) {
+      for (std::size_t p = open_.frames.size(); p-- > open_.keyframe_frame_positions.back() + 1;) {
+        if (!open_.frames[p].cam_from_submap) continue;
+        if (ParallaxToLastKeyframeDeg(open_.frames[p]) >= 2.0 * options_.min_triangulation_angle_deg) {
+          InsertKeyframes(p);
+        }
+        break;
+      }
+    }
+  }
   // End of input: a submap that never reached its last keyframe still gets the rebuild at the
   // settled focal (a short clip is often one such submap).
   if (open_.bootstrapped) RebuildIfFocalMoved(&completed);
@@ -239,6 +264,13 @@ void SubmapBuilder::HandOffOverlap(std::vector<Submap>* completed) {
     }
   }
   std::deque<FrameRecord> replay(open_.frames.begin() + static_cast<std::ptrdiff_t>(first_position), open_.frames.end());
+  previous_tail_.clear();
+  if (options_.extend_short_final_submap && !open_.keyframe_frame_positions.empty()) {
+    const std::size_t middle = open_.keyframe_frame_positions[open_.keyframe_frame_positions.size() / 2];
+    for (std::size_t p = std::min(middle, first_position); p < first_position; ++p) {
+      previous_tail_.push_back(open_.frames[p]);
+    }
+  }
   completed->push_back(Complete());
   // The next submap bootstraps from the overlap's first frame and re-tracks the rest.
   RestartWith(std::move(replay), 0, completed);

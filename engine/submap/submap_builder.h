@@ -50,7 +50,9 @@ class SubmapBuilder {
   // frame completed (usually none, rarely two when a replayed overlap completes at once).
   std::vector<Submap> AddFrame(std::int64_t index, double timestamp_s, const Features& features);
 
-  // End of input: closes the open submap if it has >= 3 keyframes.
+  // End of input: closes the open submap if it has >= 3 keyframes. A submap that did not
+  // reach keyframes_per_submap is first tracked again from the middle keyframe of the previous
+  // submap (SubmapOptions::extend_short_final_submap).
   std::vector<Submap> Finish();
 
   // Running median of all keyframes' refined focal lengths (the paper's focal estimate).
@@ -142,6 +144,10 @@ class SubmapBuilder {
   double focal_;
   std::vector<double> completed_keyframe_focals_;  // for the running median
   OpenSubmap open_;
+  // Frames of the last completed submap from its middle keyframe to the overlap start, kept
+  // so that a short submap closed by the end of input can be rebuilt over them (Finish()).
+  std::deque<FrameRecord> previous_tail_;
+  bool extending_tail_ = false;  // replaying previous_tail_: no completion by keyframe count
   bool finishing_ = false;  // end of input: bootstrap accepts any frame with enough parallax
   std::uint32_t next_submap_id_ = 0;
   SubmapBuilderStats stats_;

@@ -3,9 +3,10 @@
 // Bounds from the local-submap issue: >= 3 submaps with 6 keyframes each, >= 98 % of frames
 // posed, per-submap ATE after Sim3 < 0.2 % of altitude, and >= 60 % of the flown-over ground
 // covered by points (so emitting few points cannot pass). The issue's map bound (median
-// distance to the true surface < 0.3 % of altitude) is printed, not asserted: the default
-// schedule reaches 0.49 %, the paper's 0.298 % (too close to the bound for a stable test);
-// the submap closed at the end of the clip is the weak one (1.1-1.3 %); see docs/algorithm.md.
+// distance to the true surface < 0.3 % of altitude) is asserted for the paper's schedule
+// (measured 0.16 %, with the short final submap extended back, SubmapOptions); the default
+// KLT schedule reaches 0.37 % (its first submap, 0.47 %, is the weak one), so there it is
+// printed only; see docs/algorithm.md.
 //
 // Features come from the product's feature stage (DecoderWorker) under both schedules: the
 // default (SIFT on every 6th frame, KLT in between) and the paper's (SIFT on every frame).
@@ -175,6 +176,7 @@ TYPED_TEST(SubmapBuilderOnSyntheticClip, MapCoversTheFlownOverGround) {
   std::printf("map: %zu points, median error %.3f m, coverage %.1f %% of %zu cells\n", errors.size(),
               errors[errors.size() / 2], 100.0 * hit / seen.size(), seen.size());
   EXPECT_GE(static_cast<double>(hit) / static_cast<double>(seen.size()), 0.6);
+  if (TypeParam::interval == 1) EXPECT_LT(errors[errors.size() / 2], 0.003 * kAltitude);
 }
 
 }  // namespace
