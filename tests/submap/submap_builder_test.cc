@@ -176,7 +176,9 @@ TYPED_TEST(SubmapBuilderOnSyntheticClip, MapCoversTheFlownOverGround) {
   std::printf("map: %zu points, median error %.3f m, coverage %.1f %% of %zu cells\n", errors.size(),
               errors[errors.size() / 2], 100.0 * hit / seen.size(), seen.size());
   EXPECT_GE(static_cast<double>(hit) / static_cast<double>(seen.size()), 0.6);
-  if (TypeParam::interval == 1) EXPECT_LT(errors[errors.size() / 2], 0.003 * kAltitude);
+  if (TypeParam::interval == 1) {
+    EXPECT_LT(errors[errors.size() / 2], 0.003 * kAltitude);
+  }
 }
 
 }  // namespace
