@@ -173,6 +173,14 @@ double SubmapBuilder::ParallaxToLastKeyframeDeg(const FrameRecord& frame) const 
   return UpperMedian(std::move(angles));
 }
 
+std::optional<std::size_t> SubmapBuilder::LastTrackedAfterLastKeyframe() const {
+  if (open_.keyframe_frame_positions.empty()) return std::nullopt;
+  for (std::size_t p = open_.frames.size(); p-- > open_.keyframe_frame_positions.back() + 1;) {
+    if (open_.frames[p].cam_from_submap) return p;
+  }
+  return std::nullopt;
+}
+
 std::vector<Submap> SubmapBuilder::Finish() {
   std::vector<Submap> completed;
   if (options_.extend_short_final_submap && open_.bootstrapped && !previous_tail_.empty() &&
@@ -189,13 +197,10 @@ std::vector<Submap> SubmapBuilder::Finish() {
     extending_tail_ = false;
     // The ground seen after the last keyframe is mapped too: the last tracked frame becomes a
     // keyframe when its parallax allows triangulating.
-    if (open_.bootstrapped && !open_.keyframe_frame_positions.empty()) {
-      for (std::size_t p = open_.frames.size(); p-- > open_.keyframe_frame_positions.back() + 1;) {
-        if (!open_.frames[p].cam_from_submap) continue;
-        if (ParallaxToLastKeyframeDeg(open_.frames[p]) >= 2.0 * options_.min_triangulation_angle_deg) {
-          InsertKeyframes(p);
-        }
-        break;
+    if (open_.bootstrapped) {
+      const std::optional<std::size_t> last = LastTrackedAfterLastKeyframe();
+      if (last && ParallaxToLastKeyframeDeg(open_.frames[*last]) >= 2.0 * options_.min_triangulation_angle_deg) {
+        InsertKeyframes(*last);
       }
     }
   }
@@ -213,12 +218,7 @@ std::vector<Submap> SubmapBuilder::Finish() {
   if (open_.bootstrapped && static_cast<int>(open_.keyframes.size()) < 3) {
     // The last tracked frame closes the submap as a keyframe (with a middle keyframe and new
     // landmarks, as usual) ...
-    for (std::size_t p = open_.frames.size(); p-- > open_.keyframe_frame_positions.back() + 1;) {
-      if (open_.frames[p].cam_from_submap) {
-        InsertKeyframes(p);
-        break;
-      }
-    }
+    if (const std::optional<std::size_t> last = LastTrackedAfterLastKeyframe()) InsertKeyframes(*last);
   }
   if (open_.bootstrapped && static_cast<int>(open_.keyframes.size()) < 3) {
     // ... or, when the second keyframe is the last frame, the posed non-keyframe farthest from

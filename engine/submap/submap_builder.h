@@ -90,6 +90,8 @@ class SubmapBuilder {
   // Median angle (degrees) between the rays from the last keyframe and from `frame` to the
   // landmarks `frame` tracks.
   double ParallaxToLastKeyframeDeg(const FrameRecord& frame) const;
+  // Position in `frames` of the newest posed frame after the last keyframe, if any.
+  std::optional<std::size_t> LastTrackedAfterLastKeyframe() const;
 
   // bootstrap.cc: returns true once the second keyframe exists.
   bool TryBootstrap();
