@@ -69,21 +69,11 @@ void Perturb(const Eigen::Matrix3d& R, const Eigen::Vector3d& t,
   *t_out = (t + tangent * delta.tail<2>()).normalized();
 }
 
-}  // namespace
-
-bool EssentialEstimator::Refine(std::span<const Datum> inliers, Eigen::Matrix3d* E) const {
-  // Levenberg-Marquardt on the Sampson distances over the 5 degrees of freedom of (R, t/|t|).
-  // (A linear 8-point refit minimises an algebraic error and was measured to be less accurate.)
+// Levenberg-Marquardt on the Sampson distances over the 5 degrees of freedom of (R, t/|t|),
+// in place. (A linear 8-point refit minimises an algebraic error and was measured to be less
+// accurate.)
+bool RefineMotion(std::span<const TwoViewCorrespondence> inliers, Eigen::Matrix3d& R, Eigen::Vector3d& t) {
   if (inliers.size() < 6) return false;
-  cv::Mat Ecv, R1cv, R2cv, tcv;
-  cv::eigen2cv(*E, Ecv);
-  cv::decomposeEssentialMat(Ecv, R1cv, R2cv, tcv);  // any decomposition gives +-E
-  Eigen::Matrix3d R;
-  Eigen::Vector3d t;
-  cv::cv2eigen(R1cv, R);
-  cv::cv2eigen(tcv, t);
-  t.normalize();
-
   const Eigen::Index n = static_cast<Eigen::Index>(inliers.size());
   Eigen::VectorXd r(n), r_step(n);
   Eigen::Matrix<double, Eigen::Dynamic, 5> J(n, 5);
@@ -133,6 +123,21 @@ bool EssentialEstimator::Refine(std::span<const Datum> inliers, Eigen::Matrix3d*
     }
     if (!improved) break;
   }
+  return R.allFinite() && t.allFinite();
+}
+
+}  // namespace
+
+bool EssentialEstimator::Refine(std::span<const Datum> inliers, Eigen::Matrix3d* E) const {
+  cv::Mat Ecv, R1cv, R2cv, tcv;
+  cv::eigen2cv(*E, Ecv);
+  cv::decomposeEssentialMat(Ecv, R1cv, R2cv, tcv);  // any decomposition gives +-E
+  Eigen::Matrix3d R;
+  Eigen::Vector3d t;
+  cv::cv2eigen(R1cv, R);
+  cv::cv2eigen(tcv, t);
+  t.normalize();
+  if (!RefineMotion(inliers, R, t)) return false;
   *E = Hat(t) * R;
   return E->allFinite();
 }
@@ -155,12 +160,8 @@ bool Depths(const Eigen::Matrix3d& R, const Eigen::Vector3d& t, const Eigen::Vec
   return true;
 }
 
-}  // namespace
-
-RelativePose RecoverRelativePose(const Eigen::Matrix3d& E,
-                                 std::span<const TwoViewCorrespondence> data,
-                                 const std::vector<uint8_t>& mask, double max_depth) {
-  GLAM_CHECK(mask.size() == data.size());
+// The four (R, t) of an essential matrix (|t| = 1).
+std::array<RelativeMotionEstimator::Model, 4> Decompositions(const Eigen::Matrix3d& E) {
   cv::Mat Ecv, R1cv, R2cv, tcv;
   cv::eigen2cv(E, Ecv);
   cv::decomposeEssentialMat(Ecv, R1cv, R2cv, tcv);
@@ -170,12 +171,49 @@ RelativePose RecoverRelativePose(const Eigen::Matrix3d& E,
   cv::cv2eigen(R2cv, R2);
   cv::cv2eigen(tcv, t);
   t.normalize();
-  const std::array<std::pair<Eigen::Matrix3d, Eigen::Vector3d>, 4> candidates = {
-      {{R1, t}, {R1, -t}, {R2, t}, {R2, -t}}};
+  return {{{R1, t}, {R1, -t}, {R2, t}, {R2, -t}}};
+}
 
+}  // namespace
+
+std::vector<RelativeMotionEstimator::Model> RelativeMotionEstimator::Fit(std::span<const Datum> sample) const {
+  std::vector<Model> models;
+  for (const Eigen::Matrix3d& E : essential_.Fit(sample)) {
+    for (const Model& m : Decompositions(E)) {
+      bool in_front = true;
+      for (const Datum& d : sample) in_front = in_front && !Behind(m, d);
+      if (in_front) models.push_back(m);
+    }
+  }
+  return models;
+}
+
+bool RelativeMotionEstimator::Behind(const Model& m, const Datum& d) const {
+  const Eigen::Vector3d x1 = d.x1.homogeneous(), x2 = d.x2.homogeneous();
+  const Eigen::Vector3d ray1_in_cam2 = m.R * x1;
+  // Nearly parallel rays: the depth signs are noise, so the point does not vote.
+  if (ray1_in_cam2.normalized().cross(x2.normalized()).norm() < min_parallax_rad_) return false;
+  double d1 = 0, d2 = 0;
+  if (!Depths(m.R, m.t, x1, x2, &d1, &d2)) return false;
+  return d1 <= 0 || d2 <= 0;
+}
+
+double RelativeMotionEstimator::Residual(const Model& m, const Datum& d) const {
+  if (Behind(m, d)) return std::numeric_limits<double>::infinity();
+  return essential_.Residual(Hat(m.t) * m.R, d);
+}
+
+bool RelativeMotionEstimator::Refine(std::span<const Datum> inliers, Model* m) const {
+  return RefineMotion(inliers, m->R, m->t);
+}
+
+RelativePose RecoverRelativePose(const Eigen::Matrix3d& E,
+                                 std::span<const TwoViewCorrespondence> data,
+                                 const std::vector<uint8_t>& mask, double max_depth) {
+  GLAM_CHECK(mask.size() == data.size());
   RelativePose best;
   best.num_inliers = -1;
-  for (const auto& [R, tc] : candidates) {
+  for (const auto& [R, tc] : Decompositions(E)) {
     RelativePose pose;
     pose.inlier_mask.assign(data.size(), 0);
     for (size_t i = 0; i < data.size(); ++i) {
@@ -200,12 +238,12 @@ RelativePoseResult EstimateRelativePose(std::span<const TwoViewCorrespondence> d
                                         double focal_px, const RansacOptions& options,
                                         double max_depth) {
   RelativePoseResult result;
-  const auto ransac = Ransac(EssentialEstimator(focal_px), data, options);
+  const auto ransac = Ransac(RelativeMotionEstimator(focal_px, options.inlier_threshold / focal_px), data, options);
   result.iterations = ransac.iterations;
   result.inlier_mask.assign(data.size(), 0);
   if (!ransac.success) return result;
-  result.essential = ransac.model;
-  RelativePose pose = RecoverRelativePose(ransac.model, data, ransac.inlier_mask, max_depth);
+  result.essential = Hat(ransac.model.t) * ransac.model.R;
+  RelativePose pose = RecoverRelativePose(result.essential, data, ransac.inlier_mask, max_depth);
   result.cam2_from_cam1 = pose.cam2_from_cam1;
   result.inlier_mask = std::move(pose.inlier_mask);
   result.num_inliers = pose.num_inliers;

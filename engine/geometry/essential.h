@@ -42,6 +42,37 @@ class EssentialEstimator {
   double focal_px_;
 };
 
+// RANSAC over the motion (R, t) instead of E: each five-point solution is decomposed and kept
+// with every decomposition that puts the sample in front of both cameras, and a correspondence
+// whose point lies behind either camera is an outlier. Scored on E alone, a wrong solution of a
+// nearly planar scene (aerial nadir views) that explains the flow within the threshold but puts
+// half the points behind the cameras can win: measured on a 640x360 lawnmower clip at 100 m,
+// every other bootstrap attempt came out with a 0.25 deg median triangulation angle instead of
+// 5-13 deg. Points whose rays are closer than min_parallax_rad do not vote (depth sign is noise).
+class RelativeMotionEstimator {
+ public:
+  using Datum = TwoViewCorrespondence;
+  struct Model {
+    Eigen::Matrix3d R;  // cam2_from_cam1 rotation
+    Eigen::Vector3d t;  // cam2_from_cam1 translation, |t| = 1
+  };
+  static constexpr int kMinSampleSize = 5;
+
+  RelativeMotionEstimator(double focal_px, double min_parallax_rad)
+      : essential_(focal_px), min_parallax_rad_(min_parallax_rad) {}
+
+  std::vector<Model> Fit(std::span<const Datum> sample) const;
+  // Sampson distance in pixels; infinite for a point behind either camera.
+  double Residual(const Model& m, const Datum& d) const;
+  bool Refine(std::span<const Datum> inliers, Model* m) const;
+
+ private:
+  bool Behind(const Model& m, const Datum& d) const;
+
+  EssentialEstimator essential_;
+  double min_parallax_rad_;
+};
+
 struct RelativePose {
   SE3 cam2_from_cam1;                 // |translation| = 1
   std::vector<uint8_t> inlier_mask;   // input mask AND in front of both cameras
@@ -64,7 +95,7 @@ struct RelativePoseResult {
   int iterations = 0;
 };
 
-// RANSAC essential matrix + RecoverRelativePose. options.inlier_threshold in pixels.
+// RANSAC (RelativeMotionEstimator) + RecoverRelativePose. options.inlier_threshold in pixels.
 // success requires options.min_inliers (and 5) inliers after cheirality.
 // max_depth as in RecoverRelativePose: raise it where small baselines are expected (a
 // bootstrap watching parallax grow decides on triangulation angles itself).
