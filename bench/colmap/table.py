@@ -57,7 +57,7 @@ def main():
                      f"{ct['map_s']:.1f} s" + (f", vocabulary tree build {ct['vocab_s']:.1f} s "
                                                  f"/ {vocab_cpu:.0f} CPU s not included"
                                                  if ct["vocab_s"] else "")
-                     + f"; {ct['models']} model(s)); GLAM ATE = {ate_ratio:.2f}x COLMAP's; "
+                     + f"; {ct['models']} model(s)); GLAM ATE = {ate_ratio:.3g}x COLMAP's; "
                      f"load average {ct['load_before']} before / {ct['load_after']} after")
     print()
     print("\n".join(notes))
