@@ -1,6 +1,7 @@
 #include "engine/submap/submap_builder.h"
 
 #include <algorithm>
+#include <iterator>
 #include <utility>
 #include <cmath>
 
@@ -114,7 +115,7 @@ void SubmapBuilder::Process(FrameRecord record, std::vector<Submap>* completed) 
   // frames away) — unless tracking is about to be lost.
   const bool about_to_lose = inliers < 2 * options_.min_tracking_inliers;
   if (inliers < open_.tau_resection &&
-      ((current.detected && ParallaxToLastKeyframeDeg(current) >= 2.0 * options_.min_triangulation_angle_deg) ||
+      ((current.detected && CanTriangulateWithLastKeyframe(current)) ||
        about_to_lose)) {
     InsertKeyframes(open_.frames.size() - 1);
   }
@@ -173,6 +174,10 @@ double SubmapBuilder::ParallaxToLastKeyframeDeg(const FrameRecord& frame) const 
   return UpperMedian(std::move(angles));
 }
 
+bool SubmapBuilder::CanTriangulateWithLastKeyframe(const FrameRecord& frame) const {
+  return ParallaxToLastKeyframeDeg(frame) >= 2.0 * options_.min_triangulation_angle_deg;
+}
+
 std::optional<std::size_t> SubmapBuilder::LastTrackedAfterLastKeyframe() const {
   if (open_.keyframe_frame_positions.empty()) return std::nullopt;
   for (std::size_t p = open_.frames.size(); p-- > open_.keyframe_frame_positions.back() + 1;) {
@@ -199,7 +204,7 @@ std::vector<Submap> SubmapBuilder::Finish() {
     // keyframe when its parallax allows triangulating.
     if (open_.bootstrapped) {
       const std::optional<std::size_t> last = LastTrackedAfterLastKeyframe();
-      if (last && ParallaxToLastKeyframeDeg(open_.frames[*last]) >= 2.0 * options_.min_triangulation_angle_deg) {
+      if (last && CanTriangulateWithLastKeyframe(open_.frames[*last])) {
         InsertKeyframes(*last);
       }
     }
@@ -263,15 +268,18 @@ void SubmapBuilder::HandOffOverlap(std::vector<Submap>* completed) {
       break;
     }
   }
-  std::deque<FrameRecord> replay(open_.frames.begin() + static_cast<std::ptrdiff_t>(first_position), open_.frames.end());
-  previous_tail_.clear();
-  if (options_.extend_short_final_submap && !open_.keyframe_frame_positions.empty()) {
-    const std::size_t middle = open_.keyframe_frame_positions[open_.keyframe_frame_positions.size() / 2];
-    for (std::size_t p = std::min(middle, first_position); p < first_position; ++p) {
-      previous_tail_.push_back(open_.frames[p]);
-    }
-  }
+  const std::size_t tail_position =
+      options_.extend_short_final_submap && !open_.keyframe_frame_positions.empty()
+          ? std::min(open_.keyframe_frame_positions[open_.keyframe_frame_positions.size() / 2], first_position)
+          : first_position;
   completed->push_back(Complete());
+  // Complete() is done with the frames: the tail and the overlap are moved out, not copied
+  // (features are ~270 KB per frame); their poses and matches are reset when re-tracked.
+  const auto begin = std::make_move_iterator(open_.frames.begin());
+  previous_tail_.assign(begin + static_cast<std::ptrdiff_t>(tail_position),
+                        begin + static_cast<std::ptrdiff_t>(first_position));
+  std::deque<FrameRecord> replay(begin + static_cast<std::ptrdiff_t>(first_position),
+                                 std::make_move_iterator(open_.frames.end()));
   // The next submap bootstraps from the overlap's first frame and re-tracks the rest.
   RestartWith(std::move(replay), 0, completed);
 }

@@ -90,6 +90,9 @@ class SubmapBuilder {
   // Median angle (degrees) between the rays from the last keyframe and from `frame` to the
   // landmarks `frame` tracks.
   double ParallaxToLastKeyframeDeg(const FrameRecord& frame) const;
+  // Parallax to the last keyframe of at least twice min_triangulation_angle_deg: the middle
+  // keyframe / `frame` pair of a new keyframe can triangulate.
+  bool CanTriangulateWithLastKeyframe(const FrameRecord& frame) const;
   // Position in `frames` of the newest posed frame after the last keyframe, if any.
   std::optional<std::size_t> LastTrackedAfterLastKeyframe() const;
 
