@@ -171,7 +171,10 @@ std::array<RelativeMotionEstimator::Model, 4> Decompositions(const Eigen::Matrix
   cv::cv2eigen(R2cv, R2);
   cv::cv2eigen(tcv, t);
   t.normalize();
-  return {{{R1, t}, {R1, -t}, {R2, t}, {R2, -t}}};
+  const auto model = [](const Eigen::Matrix3d& R, const Eigen::Vector3d& tc) {
+    return RelativeMotionEstimator::Model{R, tc, Hat(tc) * R};
+  };
+  return {model(R1, t), model(R1, -t), model(R2, t), model(R2, -t)};
 }
 
 }  // namespace
@@ -200,11 +203,13 @@ bool RelativeMotionEstimator::Behind(const Model& m, const Datum& d) const {
 
 double RelativeMotionEstimator::Residual(const Model& m, const Datum& d) const {
   if (Behind(m, d)) return std::numeric_limits<double>::infinity();
-  return essential_.Residual(Hat(m.t) * m.R, d);
+  return essential_.Residual(m.E, d);
 }
 
 bool RelativeMotionEstimator::Refine(std::span<const Datum> inliers, Model* m) const {
-  return RefineMotion(inliers, m->R, m->t);
+  if (!RefineMotion(inliers, m->R, m->t)) return false;
+  m->E = Hat(m->t) * m->R;
+  return true;
 }
 
 RelativePose RecoverRelativePose(const Eigen::Matrix3d& E,
@@ -213,21 +218,21 @@ RelativePose RecoverRelativePose(const Eigen::Matrix3d& E,
   GLAM_CHECK(mask.size() == data.size());
   RelativePose best;
   best.num_inliers = -1;
-  for (const auto& [R, tc] : Decompositions(E)) {
+  for (const RelativeMotionEstimator::Model& m : Decompositions(E)) {
     RelativePose pose;
     pose.inlier_mask.assign(data.size(), 0);
     for (size_t i = 0; i < data.size(); ++i) {
       if (!mask[i]) continue;
       double d1 = 0, d2 = 0;
       const Eigen::Vector3d x1 = data[i].x1.homogeneous(), x2 = data[i].x2.homogeneous();
-      if (!Depths(R, tc, x1, x2, &d1, &d2)) continue;
+      if (!Depths(m.R, m.t, x1, x2, &d1, &d2)) continue;
       if (d1 > 0 && d2 > 0 && d1 * x1.norm() < max_depth) {
         pose.inlier_mask[i] = 1;
         ++pose.num_inliers;
       }
     }
     if (pose.num_inliers > best.num_inliers) {
-      pose.cam2_from_cam1 = SE3(SO3(R), tc);
+      pose.cam2_from_cam1 = SE3(SO3(m.R), m.t);
       best = std::move(pose);
     }
   }
@@ -242,7 +247,7 @@ RelativePoseResult EstimateRelativePose(std::span<const TwoViewCorrespondence> d
   result.iterations = ransac.iterations;
   result.inlier_mask.assign(data.size(), 0);
   if (!ransac.success) return result;
-  result.essential = Hat(ransac.model.t) * ransac.model.R;
+  result.essential = ransac.model.E;
   RelativePose pose = RecoverRelativePose(result.essential, data, ransac.inlier_mask, max_depth);
   result.cam2_from_cam1 = pose.cam2_from_cam1;
   result.inlier_mask = std::move(pose.inlier_mask);

@@ -55,6 +55,7 @@ class RelativeMotionEstimator {
   struct Model {
     Eigen::Matrix3d R;  // cam2_from_cam1 rotation
     Eigen::Vector3d t;  // cam2_from_cam1 translation, |t| = 1
+    Eigen::Matrix3d E;  // [t]x R, kept for Residual (evaluated for every datum)
   };
   static constexpr int kMinSampleSize = 5;
 
