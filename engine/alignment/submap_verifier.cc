@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include <Eigen/Eigenvalues>
+
 #include "engine/core/error.h"
 #include "engine/core/logging.h"
 #include "engine/core/median.h"
@@ -19,6 +21,7 @@ void VerificationOptions::Check() const {
   CheckInRange("VerificationOptions.inlier_threshold_fraction", inlier_threshold_fraction, 1e-5, 1.0);
   CheckGreaterEqual("VerificationOptions.min_inliers", min_inliers, 3);
   CheckInRange("VerificationOptions.min_inlier_ratio", min_inlier_ratio, 0.0, 1.0);
+  CheckGreaterEqual("VerificationOptions.max_rotation_sigma_deg", max_rotation_sigma_deg, 0.0);
   CheckGreater("VerificationOptions.max_iterations", max_iterations, 0);
   CheckInRange("VerificationOptions.confidence", confidence, 0.5, 0.999999);
 }
@@ -40,6 +43,35 @@ double SubmapDepthScale(const Submap& submap) {
   const double median = UpperMedian(std::move(distances));
   return median > 0 && std::isfinite(median) ? median : 1.0;
 }
+
+namespace {
+
+double RotationSigmaDeg(const std::vector<PointCorrespondence>& data, const std::vector<unsigned char>& inlier_mask,
+                        double inlier_rmse) {
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  int n = 0;
+  for (std::size_t i = 0; i < data.size(); ++i) {
+    if (!inlier_mask[i]) continue;
+    centroid += data[i].target;
+    ++n;
+  }
+  if (n < 3) return std::numeric_limits<double>::infinity();
+  centroid /= n;
+  // Information of a small rotation about the centroid: sum of [q]x^T [q]x over the inliers,
+  // q = point - centroid; with isotropic point noise sigma the rotation's covariance is
+  // sigma^2 * inverse(information), so its weakest direction has sigma / sqrt(lambda_min).
+  Eigen::Matrix3d information = Eigen::Matrix3d::Zero();
+  for (std::size_t i = 0; i < data.size(); ++i) {
+    if (!inlier_mask[i]) continue;
+    const Eigen::Vector3d q = data[i].target - centroid;
+    information += q.squaredNorm() * Eigen::Matrix3d::Identity() - q * q.transpose();
+  }
+  const double lambda_min = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(information).eigenvalues()(0);
+  if (!(lambda_min > 0)) return std::numeric_limits<double>::infinity();
+  return inlier_rmse / std::sqrt(lambda_min) * 180.0 / M_PI;
+}
+
+}  // namespace
 
 PairVerification VerifySubmapPair(const Submap& reference, const Submap& query,
                                   const VerificationOptions& options) {
@@ -71,8 +103,10 @@ PairVerification VerifySubmapPair(const Submap& reference, const Submap& query,
     if (ransac.inlier_mask[i]) sum_sq += (ransac.model * data[i].source - data[i].target).squaredNorm();
   }
   out.inlier_rmse = out.inliers > 0 ? std::sqrt(sum_sq / out.inliers) : 0.0;
+  out.rotation_sigma_deg = RotationSigmaDeg(data, ransac.inlier_mask, out.inlier_rmse);
   out.verified = ransac.success && out.inliers >= options.min_inliers &&
-                 out.inliers >= options.min_inlier_ratio * out.matches;
+                 out.inliers >= options.min_inlier_ratio * out.matches &&
+                 (options.max_rotation_sigma_deg <= 0 || out.rotation_sigma_deg <= options.max_rotation_sigma_deg);
   if (out.verified) {
     out.reference_from_query = ransac.model;
     out.inlier_pairs.reserve(static_cast<std::size_t>(out.inliers));
@@ -83,8 +117,10 @@ PairVerification VerifySubmapPair(const Submap& reference, const Submap& query,
       out.inlier_pairs.push_back({r.id, q.id, r.point_in_submap, q.point_in_submap});
     }
   }
-  GLAM_LOG_DEBUG("verify submap {} against {}: {} matches, {} inliers, rmse {:.4g} (threshold {:.4g}){}",
+  GLAM_LOG_DEBUG("verify submap {} against {}: {} matches, {} inliers, rmse {:.4g} (threshold {:.4g}), "
+                 "rotation sigma {:.3f} deg{}",
                  query.id, reference.id, out.matches, out.inliers, out.inlier_rmse, threshold,
+                 out.rotation_sigma_deg,
                  out.verified ? "" : ": rejected");
   return out;
 }

@@ -30,6 +30,9 @@ struct VerificationOptions {
   double inlier_threshold_fraction = 0.02;
   int min_inliers = 15;            // fewer -> the pair is rejected
   double min_inlier_ratio = 0.2;   // inliers / matches below this -> rejected
+  // Rejects a pair whose inliers pin the rotation down worse than this (standard deviation in
+  // degrees about the weakest axis, from the inliers' spread and residual; 0 = no check).
+  double max_rotation_sigma_deg = 0.0;
   int max_iterations = 1000;
   double confidence = 0.999;
   unsigned seed = 1;
@@ -43,6 +46,9 @@ struct PairVerification {
   int matches = 0;
   int inliers = 0;
   double inlier_rmse = 0;  // in the reference submap's units
+  // Standard deviation (degrees) of the rotation about its weakest axis implied by the inlier
+  // residual and the inliers' spread: a few inliers in a small patch leave it loose.
+  double rotation_sigma_deg = 0;
   // a = reference, b = query; empty when !verified.
   std::vector<LandmarkMatch> inlier_pairs;
 };

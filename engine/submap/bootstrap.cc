@@ -96,6 +96,8 @@ bool SubmapBuilder::TryBootstrap() {
   const bool paper_rule = enough_parallax &&
                           (static_cast<int>(candidate.points.size()) < open_.tau_stereo ||
                            candidate.mean_angle_deg > options_.alpha_stereo_deg);
+  const bool parallax_rule = enough_parallax && options_.bootstrap_accept_parallax_deg > 0 &&
+                             candidate.median_angle_deg >= options_.bootstrap_accept_parallax_deg;
   const bool waited_too_long =
       finishing_ || static_cast<int>(position - open_.bootstrap_first) >= options_.max_bootstrap_frames;
   // Restart only when the first keyframe is no longer in view; low parallax means waiting.
@@ -104,7 +106,7 @@ bool SubmapBuilder::TryBootstrap() {
   GLAM_LOG_TRACE("bootstrap frame {} vs {}: {} matches, usable {}, {} points, median {:.2f} deg, mean {:.2f} deg",
                  current.index, first.index, matches.size(), usable, candidate.points.size(),
                  candidate.median_angle_deg, candidate.mean_angle_deg);
-  if (!paper_rule && !(enough_parallax && waited_too_long)) {
+  if (!paper_rule && !parallax_rule && !(enough_parallax && waited_too_long)) {
     if (losing_overlap || waited_too_long) {
       // Restart with the current frame as the first keyframe candidate; earlier frames of this
       // attempt stay unposed and are dropped.

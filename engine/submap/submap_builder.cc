@@ -118,6 +118,9 @@ void SubmapBuilder::Process(FrameRecord record, std::vector<Submap>* completed) 
       ((current.detected && CanTriangulateWithLastKeyframe(current)) ||
        about_to_lose)) {
     InsertKeyframes(open_.frames.size() - 1);
+  } else if (current.detected && options_.max_keyframe_parallax_deg > 0 &&
+             ParallaxToLastKeyframeDeg(current) >= options_.max_keyframe_parallax_deg) {
+    InsertKeyframes(open_.frames.size() - 1);
   }
 
   if ((!extending_tail_ && static_cast<int>(open_.keyframes.size()) >= options_.keyframes_per_submap) ||

@@ -24,12 +24,14 @@ void SubmapOptions::Check() const {
   CheckGreater("SubmapOptions.reference_features", reference_features, 0);
   CheckInRange("SubmapOptions.min_bootstrap_parallax_deg", min_bootstrap_parallax_deg, 0.1, 30.0);
   CheckGreater("SubmapOptions.max_bootstrap_frames", max_bootstrap_frames, 1);
+  CheckInRange("SubmapOptions.bootstrap_accept_parallax_deg", bootstrap_accept_parallax_deg, 0.0, 90.0);
   CheckGreaterEqual("SubmapOptions.min_tracking_inliers", min_tracking_inliers, 6);
   CheckInRange("SubmapOptions.max_view_angle_deg", max_view_angle_deg, 1.0, 180.0);
   CheckInRange("SubmapOptions.match_radius_fraction", match_radius_fraction, 0.001, 1.0);
   CheckInRange("SubmapOptions.match_ratio", match_ratio, 0.1, 1.0);
   CheckGreater("SubmapOptions.pnp_threshold_pixels", pnp_threshold_pixels, 0.0);
   CheckInRange("SubmapOptions.min_triangulation_angle_deg", min_triangulation_angle_deg, 0.0, 45.0);
+  CheckInRange("SubmapOptions.max_keyframe_parallax_deg", max_keyframe_parallax_deg, 0.0, 90.0);
   CheckGreater("SubmapOptions.max_new_point_reprojection_pixels", max_new_point_reprojection_pixels, 0.0);
   CheckGreaterEqual("SubmapOptions.max_frames_per_submap", max_frames_per_submap, 10);
   CheckGreaterEqual("SubmapOptions.completion_ba_max_frames", completion_ba_max_frames, 0);
