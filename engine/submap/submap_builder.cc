@@ -113,15 +113,18 @@ void SubmapBuilder::Process(FrameRecord record, std::vector<Submap>* completed) 
   // the parallax to the previous keyframe allows triangulating between the middle keyframe
   // and this frame, and on a detected frame (the next one is at most detection_interval
   // frames away) — unless tracking is about to be lost.
+  // Optional parallax rule (SubmapOptions::max_keyframe_parallax_deg): a detected frame at that
+  // parallax. Looked at only above tau_resection: below it, a detected frame that the paper
+  // rule did not take has less parallax than triangulation needs, which Check() keeps below
+  // the rule's angle, so the parallax is never computed twice.
   const bool about_to_lose = inliers < 2 * options_.min_tracking_inliers;
-  if (inliers < open_.tau_resection &&
-      ((current.detected && CanTriangulateWithLastKeyframe(current)) ||
-       about_to_lose)) {
-    InsertKeyframes(open_.frames.size() - 1);
-  } else if (current.detected && options_.max_keyframe_parallax_deg > 0 &&
-             ParallaxToLastKeyframeDeg(current) >= options_.max_keyframe_parallax_deg) {
-    InsertKeyframes(open_.frames.size() - 1);
-  }
+  const bool below_tau = inliers < open_.tau_resection;
+  const bool paper_keyframe =
+      below_tau && ((current.detected && CanTriangulateWithLastKeyframe(current)) || about_to_lose);
+  const bool parallax_keyframe =
+      !below_tau && current.detected && options_.max_keyframe_parallax_deg > 0 &&
+      ParallaxToLastKeyframeDeg(current) >= options_.max_keyframe_parallax_deg;
+  if (paper_keyframe || parallax_keyframe) InsertKeyframes(open_.frames.size() - 1);
 
   if ((!extending_tail_ && static_cast<int>(open_.keyframes.size()) >= options_.keyframes_per_submap) ||
       static_cast<int>(open_.frames.size()) >= options_.max_frames_per_submap) {

@@ -38,6 +38,22 @@ TEST(SubmapOptions, RejectsBadFocalOptions) {
   EXPECT_NO_THROW(o.Check());
 }
 
+TEST(SubmapOptions, RejectsBadParallaxRules) {
+  SubmapOptions o;
+  o.max_keyframe_parallax_deg = -1;
+  ExpectRejected(o, "max_keyframe_parallax_deg");
+  o = {};
+  o.max_keyframe_parallax_deg = 1.5;  // below 2 x min_triangulation_angle_deg: cannot triangulate
+  ExpectRejected(o, "max_keyframe_parallax_deg");
+  o = {};
+  o.bootstrap_accept_parallax_deg = 95;
+  ExpectRejected(o, "bootstrap_accept_parallax_deg");
+  o = {};
+  o.max_keyframe_parallax_deg = 8;
+  o.bootstrap_accept_parallax_deg = 6;
+  EXPECT_NO_THROW(o.Check());
+}
+
 TEST(SubmapOptions, ThresholdsScaleWithTheFirstKeyframesFeatures) {
   SubmapOptions o;
   EXPECT_EQ(o.EffectiveTauResection(o.reference_features), o.tau_resection);
