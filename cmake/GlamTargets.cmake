@@ -33,7 +33,7 @@ function(glam_add_test name)
   cmake_parse_arguments(ARG "NEEDS_CLI" "TIMEOUT" "SOURCES;DEPS;LABELS;FIXTURES" ${ARGN})
   add_executable(${name} ${ARG_SOURCES})
   glam_target_defaults(${name})
-  target_link_libraries(${name} PRIVATE ${ARG_DEPS} GTest::gtest GTest::gtest_main GTest::gmock)
+  target_link_libraries(${name} PRIVATE ${ARG_DEPS} glam_test_main GTest::gtest GTest::gmock)
   # Tests find the CLI and the shared synthetic clips (CTest fixtures) through these.
   target_compile_definitions(${name} PRIVATE
     GLAM_TEST_FIXTURES_DIR="${CMAKE_BINARY_DIR}/fixtures"

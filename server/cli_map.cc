@@ -149,6 +149,14 @@ void RegisterMapCommand(CLI::App& app) {
   cmd->add_option("--keyframes-per-submap", args->options.submap.keyframes_per_submap,
                   "Keyframes at which a submap is completed")
       ->capture_default_str();
+  cmd->add_option("--keyframe-parallax", args->options.submap.max_keyframe_parallax_deg,
+                  "A tracked frame at this median parallax (deg) to the last keyframe becomes a "
+                  "keyframe even with many PnP inliers; 0 = the paper's inlier rule alone")
+      ->capture_default_str();
+  cmd->add_option("--bootstrap-parallax", args->options.submap.bootstrap_accept_parallax_deg,
+                  "The bootstrap takes its second keyframe at this median parallax (deg) even "
+                  "with many essential inliers; 0 = the paper's rule alone")
+      ->capture_default_str();
   cmd->add_option("--completion-ba-frames", args->options.submap.completion_ba_max_frames,
                   "Tracked frames that join each submap's final bundle adjustment; 0 = the "
                   "paper's completion (PnP relocalisation only)")
@@ -169,6 +177,10 @@ void RegisterMapCommand(CLI::App& app) {
                   fmt::format("SIFT features per frame (image folders: {})", kPhotoFolderMaxFeatures))
       ->capture_default_str()
       ->each([args](const std::string&) { args->max_features_given = true; });
+  cmd->add_option("--feature-grid", args->options.sift.grid_cols,
+                  "Spread each frame's SIFT features over a grid of this many columns (rows from "
+                  "the aspect ratio), strongest first per cell; 0 = strongest over the frame (the paper)")
+      ->capture_default_str();
   cmd->add_flag("--resume", args->options.resume,
                "Continue an interrupted run in the same --out from its last completed submap "
                "(checkpoint.json); without a usable checkpoint the run starts from the beginning");

@@ -58,7 +58,7 @@ double RotationSigmaDeg(const std::vector<PointCorrespondence>& data, const std:
   if (n < 3) return std::numeric_limits<double>::infinity();
   centroid /= n;
   // Information of a small rotation about the centroid: sum of [q]x^T [q]x over the inliers,
-  // q = point - centroid; with isotropic point noise sigma the rotation's covariance is
+  // q = point - centroid; with isotropic point noise sigma (per axis) the rotation's covariance is
   // sigma^2 * inverse(information), so its weakest direction has sigma / sqrt(lambda_min).
   Eigen::Matrix3d information = Eigen::Matrix3d::Zero();
   for (std::size_t i = 0; i < data.size(); ++i) {
@@ -68,7 +68,9 @@ double RotationSigmaDeg(const std::vector<PointCorrespondence>& data, const std:
   }
   const double lambda_min = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(information).eigenvalues()(0);
   if (!(lambda_min > 0)) return std::numeric_limits<double>::infinity();
-  return inlier_rmse / std::sqrt(lambda_min) * 180.0 / M_PI;
+  // inlier_rmse is the RMS of 3D residual norms: the per-axis noise is that over sqrt(3).
+  const double sigma_per_axis = inlier_rmse / std::sqrt(3.0);
+  return sigma_per_axis / std::sqrt(lambda_min) * 180.0 / M_PI;
 }
 
 }  // namespace

@@ -26,8 +26,8 @@ void SiftOptions::Check() const {
   CheckInRange("SiftOptions.octave_layers", octave_layers, 1, 10);
   CheckInRange("SiftOptions.grid_cols", grid_cols, 0, 1000);
   CheckInRange("SiftOptions.grid_rows", grid_rows, 0, 1000);
-  if ((grid_cols == 0) != (grid_rows == 0)) {
-    throw InputError("SiftOptions.grid_cols and grid_rows must both be 0 (off) or both > 0");
+  if (grid_cols == 0 && grid_rows > 0) {
+    throw InputError("SiftOptions.grid_rows needs grid_cols > 0 (grid_cols = 0 turns bucketing off)");
   }
   CheckInRange("SiftOptions.extraction_scale", extraction_scale, 0.05, 1.0);
 }
@@ -58,7 +58,9 @@ std::vector<cv::KeyPoint> SiftExtractor::Bucket(std::vector<cv::KeyPoint> keypoi
                                                 cv::Size size) const {
   const size_t budget = static_cast<size_t>(options_.max_features);
   if (keypoints.size() <= budget) return keypoints;
-  const int cols = options_.grid_cols, rows = options_.grid_rows;
+  const int cols = options_.grid_cols;
+  const int rows = options_.grid_rows > 0 ? options_.grid_rows
+                                          : std::max(1, cols * size.height / std::max(1, size.width));
   const size_t per_cell = (budget + static_cast<size_t>(cols * rows) - 1) / (cols * rows);
   std::stable_sort(keypoints.begin(), keypoints.end(),
                    [](const cv::KeyPoint& a, const cv::KeyPoint& b) { return a.response > b.response; });

@@ -22,8 +22,12 @@ struct SiftOptions {
   double sigma = 1.6;
   int octave_layers = 3;
   // Grid bucketing: keep at most ceil(max_features / cells) strongest keypoints per cell
-  // (then fill the remaining budget with the strongest leftovers). 0 x 0 = off.
-  int grid_cols = 0;
+  // (then fill the remaining budget with the strongest leftovers). grid_cols = 0: off.
+  // grid_rows = 0: from the aspect ratio, floor(grid_cols * height / width), at least 1.
+  // On (4 columns) by default: on four 300-frame lawnmower clips it raised the ground covered
+  // by the map from 57-72 % to 64-80 % (docs/algorithm.md); the paper's method (SIFT alone)
+  // is grid_cols = 0.
+  int grid_cols = 4;
   int grid_rows = 0;
   // Detect on the image resized by this factor (0 < s <= 1); keypoints are mapped back to
   // full-resolution coordinates. 1 = full resolution.

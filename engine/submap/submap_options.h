@@ -31,11 +31,12 @@ struct SubmapOptions {
   // hovering drone): the best candidate seen so far is taken if it has enough parallax.
   int max_bootstrap_frames = 90;
   // Also take the second keyframe once the median triangulation angle reaches this, even
-  // while the essential inliers are still above tau_stereo. 0 = the paper's rule alone (the
-  // default for now: 6 deg with max_keyframe_parallax_deg = 8 gave 3 submaps and 57-72 %
-  // coverage on lawnmower seeds 1-4 but moved single submaps' depth offsets, see
-  // docs/algorithm.md).
-  double bootstrap_accept_parallax_deg = 0.0;
+  // while the essential inliers are still above tau_stereo (the scaled tau_stereo of a small
+  // frame can hold the bootstrap for 80-90 frames and 15 deg). 0 = the paper's rule alone.
+  // With max_keyframe_parallax_deg = 8: 3 submaps instead of 2 on lawnmower seeds 2-4, and
+  // with the default feature grid map medians 0.18-0.27 % of altitude on seeds 1-4
+  // (docs/algorithm.md).
+  double bootstrap_accept_parallax_deg = 6.0;
 
   // --- tracking ---
   // Fewer PnP inliers than this (absolute) -> tracking lost: close the submap, start anew.
@@ -53,8 +54,10 @@ struct SubmapOptions {
   // middle keyframe / current frame pair can triangulate.
   double min_triangulation_angle_deg = 1.0;
   // A detected frame whose median parallax to the last keyframe reaches this becomes a
-  // keyframe even while its PnP inliers are above tau_resection. 0 = the paper's rule alone.
-  double max_keyframe_parallax_deg = 0.0;
+  // keyframe even while its PnP inliers are above tau_resection (the submap's landmarks can
+  // cover the view for 200+ frames, so the paper's rule alone spreads keyframes thinly).
+  // 0 = the paper's rule alone.
+  double max_keyframe_parallax_deg = 8.0;
   double max_new_point_reprojection_pixels = 3.0;
   // Look for new landmarks in earlier keyframes too (longer tracks). Off by default: on
   // repetitive texture it adds wrong observations faster than it adds baseline (measured on

@@ -154,5 +154,55 @@ TEST(SubmapVerifier, UnrelatedSubmapsAreRejected) {
   EXPECT_FALSE(result.verified);
 }
 
+// rotation_sigma_deg predicts the rotation error: over many noisy pairs its RMS matches the
+// RMS of the true rotation error (a 3D angle, so up to ~sqrt(3) x the weakest axis' sigma),
+// and it scales with the noise. Pairs it rates worse than max_rotation_sigma_deg are rejected.
+// (inlier_rmse is the RMS of 3D residual norms; read as the per-axis noise, the sigma came out
+// sqrt(3) too large: ratio 0.81.)
+TEST(SubmapVerifier, RotationSigmaPredictsTheRotationError) {
+  VerificationOptions no_check;
+  no_check.max_rotation_sigma_deg = 0;
+  double sum_angle2 = 0, sum_sigma2 = 0, sum_sigma_half_noise = 0, sum_sigma = 0;
+  int n = 0, rejected = 0;
+  for (unsigned seed = 1; seed <= 40; ++seed) {
+    const SyntheticPair pair = MakePair(0.0, seed, 40, 0.6);
+    const PairVerification result = VerifySubmapPair(pair.previous, pair.next, no_check);
+    ASSERT_TRUE(result.verified) << "seed " << seed;
+    const double angle_deg =
+        (result.reference_from_query.rotation() * pair.prev_from_new.rotation().Inverse()).Log().norm() *
+        180.0 / M_PI;
+    sum_angle2 += angle_deg * angle_deg;
+    sum_sigma2 += result.rotation_sigma_deg * result.rotation_sigma_deg;
+    sum_sigma += result.rotation_sigma_deg;
+    const PairVerification half = VerifySubmapPair(pair.previous, MakePair(0.0, seed, 40, 0.3).next, no_check);
+    ASSERT_TRUE(half.verified);
+    sum_sigma_half_noise += half.rotation_sigma_deg;
+    ++n;
+
+    // The check rejects exactly the pairs rated worse than its limit (3x the noise, with an
+    // inlier threshold that keeps it, puts some seeds on either side of the default 0.6 deg).
+    VerificationOptions loose;
+    loose.inlier_threshold_fraction = 0.1;
+    const SyntheticPair noisy = MakePair(0.0, seed, 40, 1.9);
+    no_check.inlier_threshold_fraction = loose.inlier_threshold_fraction;
+    const PairVerification rated = VerifySubmapPair(noisy.previous, noisy.next, no_check);
+    no_check.inlier_threshold_fraction = VerificationOptions().inlier_threshold_fraction;
+    const PairVerification checked = VerifySubmapPair(noisy.previous, noisy.next, loose);
+    ASSERT_TRUE(rated.verified) << "seed " << seed;
+    EXPECT_EQ(checked.verified, rated.rotation_sigma_deg <= loose.max_rotation_sigma_deg)
+        << "seed " << seed << ": sigma " << rated.rotation_sigma_deg;
+    rejected += checked.verified ? 0 : 1;
+  }
+  const double ratio = std::sqrt(sum_angle2 / sum_sigma2);
+  std::printf("rms angle / rms sigma = %.3f, rms sigma %.3f deg, half noise sigma ratio %.3f\n", ratio,
+              std::sqrt(sum_sigma2 / n), sum_sigma_half_noise / sum_sigma);
+  EXPECT_GT(ratio, 1.0);
+  EXPECT_LT(ratio, 2.0);
+  EXPECT_NEAR(sum_sigma_half_noise / sum_sigma, 0.5, 0.1);
+  std::printf("%d of %d noisier pairs rejected\n", rejected, n);
+  EXPECT_GT(rejected, 0);
+  EXPECT_LT(rejected, n);
+}
+
 }  // namespace
 }  // namespace glam

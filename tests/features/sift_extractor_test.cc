@@ -48,6 +48,7 @@ TEST(SiftExtractor, GridBucketingSpreadsFeatures) {
   RandomTexture({320, 360}, 4, 0.45).copyTo(image(cv::Rect(320, 0, 320, 360)));
   SiftOptions options;
   options.max_features = 600;
+  options.grid_cols = 0;  // off
   auto right_fraction = [&](const Features& f) {
     size_t right = 0;
     for (const auto& kp : f.keypoints) right += kp.pt.x >= 320 ? 1 : 0;
@@ -61,6 +62,12 @@ TEST(SiftExtractor, GridBucketingSpreadsFeatures) {
   EXPECT_GE(bucketed.size(), 590u);
   EXPECT_LT(plain, 0.25);
   EXPECT_GT(right_fraction(bucketed), 0.4);
+  // Rows from the aspect ratio (the default): 4 columns -> 2 rows on 640x360.
+  SiftOptions defaults;
+  defaults.max_features = 600;
+  const Features automatic = SiftExtractor(defaults).Extract(image);
+  EXPECT_GE(automatic.size(), 590u);
+  EXPECT_GT(right_fraction(automatic), 0.4);
 }
 
 TEST(SiftExtractor, DownscaledExtractionMapsBackToFullResolution) {
@@ -148,7 +155,11 @@ TEST(SiftOptions, CheckRejectsNonsense) {
   o.max_features = 0;
   EXPECT_THROW(o.Check(), InputError);
   o = {};
-  o.grid_cols = 4;  // rows missing
+  o.grid_cols = 4;  // rows from the aspect ratio
+  EXPECT_NO_THROW(o.Check());
+  o = {};
+  o.grid_cols = 0;
+  o.grid_rows = 3;  // rows without columns
   EXPECT_THROW(o.Check(), InputError);
   o = {};
   o.extraction_scale = 1.5;

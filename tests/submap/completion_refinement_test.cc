@@ -62,7 +62,6 @@ Accuracy Measure(const test_support::ClipRun& run, const std::vector<TimedPose>&
 }
 
 TEST(CompletionRefinement, TrackedFramesInTheFinalBundleAdjustmentImproveTheSubmaps) {
-  if (const char* level = std::getenv("GLAM_LOG_LEVEL")) InitLogging(level);
   const std::filesystem::path dir = std::filesystem::path(GLAM_TEST_FIXTURES_DIR) / "lawnmower_small";
   const Intrinsics intrinsics = ReadIntrinsicsJson(dir / "intrinsics.json");
   const std::vector<TimedPose> gt = ReadTumTrajectory(dir / "gt_trajectory.tum");

@@ -72,7 +72,6 @@ void ExpectAccurate(const std::vector<Submap>& submaps, double focal, std::int64
 }
 
 TEST(FocalEstimation, StartedTenPercentLongConvergesWithinOnePercentOverSeveralSubmaps) {
-  if (const char* level = std::getenv("GLAM_LOG_LEVEL")) InitLogging(level);
   const std::filesystem::path dir = FixtureDir("oblique_relief");
   SubmapOptions options;  // defaults: 20 keyframes per submap, focal refined
   ASSERT_TRUE(options.bundle_adjustment.refine_focal);
@@ -92,7 +91,6 @@ TEST(FocalEstimation, StartedTenPercentLongConvergesWithinOnePercentOverSeveralS
 }
 
 TEST(FocalEstimation, StartedTenPercentLongAtHighAltitudeKeepsTheFirstSubmapRight) {
-  if (const char* level = std::getenv("GLAM_LOG_LEVEL")) InitLogging(level);
   const std::filesystem::path dir = FixtureDir("oblique_high");
   SubmapOptions options;
   test_support::ClipRun run = test_support::RunSubmapBuilderOnClip(

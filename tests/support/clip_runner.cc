@@ -13,12 +13,13 @@ namespace glam::test_support {
 
 ClipRun RunSubmapBuilderOnClip(const std::filesystem::path& video, const Intrinsics& intrinsics,
                                const SubmapOptions& options, int detection_interval,
-                               std::int64_t max_frames) {
+                               std::int64_t max_frames, const SiftOptions& sift) {
   SubmapBuilder builder(intrinsics, options);
   auto source = OpenFrameSource(video);
   MappingOptions mapping;
   mapping.detection_interval = detection_interval;
   FeatureStageOptions stage;
+  stage.sift = sift;
   stage.detection_interval = mapping.EffectiveDetectionInterval(source->info().fps);
   std::printf("SIFT on every %d. frame\n", stage.detection_interval);
   BoundedQueue<FrameFeatures> queue(8);

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "engine/core/camera.h"
+#include "engine/features/sift_extractor.h"
 #include "engine/map/submap.h"
 #include "engine/submap/submap_options.h"
 
@@ -20,9 +21,9 @@ struct ClipRun {
 };
 
 // detection_interval: 0 = the product's automatic schedule, 1 = SIFT on every frame (paper).
-// max_frames < 0: the whole video.
+// max_frames < 0: the whole video. sift: the feature stage's SIFT (the product's by default).
 ClipRun RunSubmapBuilderOnClip(const std::filesystem::path& video, const Intrinsics& intrinsics,
                                const SubmapOptions& options, int detection_interval,
-                               std::int64_t max_frames = -1);
+                               std::int64_t max_frames = -1, const SiftOptions& sift = SiftOptions());
 
 }  // namespace glam::test_support
