@@ -58,3 +58,19 @@ function(glam_add_test name)
     WORKING_DIRECTORY "${CMAKE_BINARY_DIR}"
     PROPERTIES ${props})
 endfunction()
+
+# glam_add_synth_fixture(name DIR dir [TIMEOUT s] ARGS synth args...)
+# A CTest fixture `synth_<name>` that renders a clip with `glam synth ARGS --out
+# <build>/fixtures/<dir>`; tests list it in glam_add_test(... FIXTURES synth_<name>). `glam synth`
+# skips re-rendering when the directory already holds the same clip (synth.json matches).
+function(glam_add_synth_fixture name)
+  cmake_parse_arguments(ARG "" "DIR;TIMEOUT" "ARGS" ${ARGN})
+  if(NOT ARG_TIMEOUT)
+    set(ARG_TIMEOUT 300)
+  endif()
+  add_test(NAME fixture.synth_${name}
+    COMMAND glam synth ${ARG_ARGS} --out ${CMAKE_BINARY_DIR}/fixtures/${ARG_DIR})
+  set_tests_properties(fixture.synth_${name} PROPERTIES
+    FIXTURES_SETUP synth_${name}
+    TIMEOUT ${ARG_TIMEOUT})
+endfunction()
