@@ -36,6 +36,9 @@ int main(int argc, char** argv) {
                  "trace, debug, info, warn, error, critical or off (env GLAM_LOG_LEVEL)")
       ->capture_default_str();
   app.parse_complete_callback([&] { glam::InitLogging(log_level); });
+  // Subcommands pass options they do not know (--log-level) up to here, so the level may
+  // follow the command too: `glam map VIDEO --out DIR --log-level debug`.
+  app.fallthrough();
   glam::cli::RegisterEvalCommand(app);
   glam::cli::RegisterSynthCommand(app);
   glam::cli::RegisterMapCommand(app);

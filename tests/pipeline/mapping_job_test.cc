@@ -137,5 +137,17 @@ TEST(MapCli, UnwritableOutputAndBadOptionsExitTwo) {
   EXPECT_NE(output.find("stride"), std::string::npos) << output;
 }
 
+// --log-level is taken before or after the command (README: every command takes it).
+TEST(MapCli, LogLevelWorksAfterTheCommandToo) {
+  const fs::path input = NoiseFolder("cli_log", 2);
+  std::string before, after, bad;
+  RunCli("--log-level debug map " + input.string() + " --out " + TempDir("cli_log_a").string(), &before);
+  RunCli("map " + input.string() + " --out " + TempDir("cli_log_b").string() + " --log-level debug", &after);
+  EXPECT_NE(before.find(" debug "), std::string::npos) << before;
+  EXPECT_NE(after.find(" debug "), std::string::npos) << after;
+  EXPECT_EQ(RunCli("map " + input.string() + " --out " + TempDir("cli_log_c").string() + " --log-level loud", &bad), 2);
+  EXPECT_NE(bad.find("loud"), std::string::npos) << bad;
+}
+
 }  // namespace
 }  // namespace glam
