@@ -20,7 +20,6 @@
 #include <gtest/gtest.h>
 
 #include "engine/core/intrinsics_io.h"
-#include "engine/core/logging.h"
 #include "engine/core/similarity_alignment.h"
 #include "engine/export/tum_trajectory.h"
 #include "tests/support/clip_runner.h"

@@ -19,7 +19,6 @@
 #include <gtest/gtest.h>
 
 #include "engine/core/intrinsics_io.h"
-#include "engine/core/logging.h"
 #include "engine/core/similarity_alignment.h"
 #include "engine/export/tum_trajectory.h"
 #include "engine/features/sift_extractor.h"

@@ -16,7 +16,6 @@
 #include <gtest/gtest.h>
 
 #include "engine/core/intrinsics_io.h"
-#include "engine/core/logging.h"
 #include "engine/core/similarity_alignment.h"
 #include "engine/export/tum_trajectory.h"
 #include "tests/support/clip_runner.h"
@@ -27,7 +26,6 @@ namespace {
 
 constexpr double kAltitude = 100.0;
 
-// Detection schedule of a test suite: kInterval = 0 is the default (automatic), 1 the paper's.
 // A test configuration: clip (fixture directory) and method. The defaults: automatic
 // detection schedule, parallax keyframe rules, feature grid. The paper's method: SIFT on every
 // frame, the paper's keyframe rules alone, no feature grid.
