@@ -162,6 +162,12 @@ TEST(SubmapVerifier, UnrelatedSubmapsAreRejected) {
 TEST(SubmapVerifier, RotationSigmaPredictsTheRotationError) {
   VerificationOptions no_check;
   no_check.max_rotation_sigma_deg = 0;
+  // For the rejection check: an inlier threshold that keeps 3x the noise, with and without
+  // the default sigma limit.
+  VerificationOptions loose;
+  loose.inlier_threshold_fraction = 0.1;
+  VerificationOptions loose_no_check = loose;
+  loose_no_check.max_rotation_sigma_deg = 0;
   double sum_angle2 = 0, sum_sigma2 = 0, sum_sigma_half_noise = 0, sum_sigma = 0;
   int n = 0, rejected = 0;
   for (unsigned seed = 1; seed <= 40; ++seed) {
@@ -179,14 +185,10 @@ TEST(SubmapVerifier, RotationSigmaPredictsTheRotationError) {
     sum_sigma_half_noise += half.rotation_sigma_deg;
     ++n;
 
-    // The check rejects exactly the pairs rated worse than its limit (3x the noise, with an
-    // inlier threshold that keeps it, puts some seeds on either side of the default 0.6 deg).
-    VerificationOptions loose;
-    loose.inlier_threshold_fraction = 0.1;
+    // The check rejects exactly the pairs rated worse than its limit (3x the noise puts some
+    // seeds on either side of the default 0.6 deg).
     const SyntheticPair noisy = MakePair(0.0, seed, 40, 1.9);
-    no_check.inlier_threshold_fraction = loose.inlier_threshold_fraction;
-    const PairVerification rated = VerifySubmapPair(noisy.previous, noisy.next, no_check);
-    no_check.inlier_threshold_fraction = VerificationOptions().inlier_threshold_fraction;
+    const PairVerification rated = VerifySubmapPair(noisy.previous, noisy.next, loose_no_check);
     const PairVerification checked = VerifySubmapPair(noisy.previous, noisy.next, loose);
     ASSERT_TRUE(rated.verified) << "seed " << seed;
     EXPECT_EQ(checked.verified, rated.rotation_sigma_deg <= loose.max_rotation_sigma_deg)

@@ -71,13 +71,18 @@ class SubmapBuilderOnSyntheticClip : public ::testing::Test {
     delete submaps_;
   }
 
+  // Estimated and true camera centres of every posed frame of the submap.
+  static void FrameCentres(const Submap& s, std::vector<Eigen::Vector3d>* est, std::vector<Eigen::Vector3d>* truth) {
+    for (const FramePose& fp : s.frame_poses) {
+      est->push_back(fp.cam_from_submap.Inverse().translation());
+      truth->push_back((*gt_)[static_cast<std::size_t>(fp.frame_index)].world_from_cam.translation());
+    }
+  }
+
   // Sim3 gt_world_from_submap fitted on the submap's camera centres (rmse = ATE).
   static Sim3 AlignToGroundTruth(const Submap& s, double* rmse) {
     std::vector<Eigen::Vector3d> est, truth;
-    for (const FramePose& fp : s.frame_poses) {
-      est.push_back(fp.cam_from_submap.Inverse().translation());
-      truth.push_back((*gt_)[static_cast<std::size_t>(fp.frame_index)].world_from_cam.translation());
-    }
+    FrameCentres(s, &est, &truth);
     const auto aligned = AlignSimilarity(est, truth);
     *rmse = aligned.rmse;
     return aligned.target_from_source;
@@ -91,10 +96,7 @@ class SubmapBuilderOnSyntheticClip : public ::testing::Test {
   // alignment by that much.)
   static Sim3 AlignTrajectoryAndViewsToGroundTruth(const Submap& s) {
     std::vector<Eigen::Vector3d> est, truth;
-    for (const FramePose& fp : s.frame_poses) {
-      est.push_back(fp.cam_from_submap.Inverse().translation());
-      truth.push_back((*gt_)[static_cast<std::size_t>(fp.frame_index)].world_from_cam.translation());
-    }
+    FrameCentres(s, &est, &truth);
     const double ahead = kAltitude / AlignSimilarity(est, truth).target_from_source.scale();
     for (const FramePose& fp : s.frame_poses) {
       est.push_back(fp.cam_from_submap.Inverse() * Eigen::Vector3d(0, 0, ahead));
