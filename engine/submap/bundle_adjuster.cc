@@ -9,41 +9,10 @@
 #include "engine/core/logging.h"
 #include "engine/core/median.h"
 #include "engine/core/options.h"
+#include "engine/submap/reprojection_cost.h"
 
 namespace glam {
 namespace {
-
-// Pixel residual of one observation; parameters: rotation (Eigen quaternion x,y,z,w),
-// translation (cam_from_submap), focal, point_in_submap. Distortion and principal point are
-// constants of the camera, not refined (too weakly observed inside one submap).
-struct ReprojectionCost {
-  ReprojectionCost(const Eigen::Vector2d& observed, const Intrinsics& in)
-      : u(observed.x()), v(observed.y()), cx(in.cx), cy(in.cy), k1(in.k1), k2(in.k2),
-        aspect(in.fy / in.fx) {}
-
-  template <typename T>
-  bool operator()(const T* rotation, const T* translation, const T* focal, const T* point,
-                  T* residual) const {
-    Eigen::Map<const Eigen::Quaternion<T>> q(rotation);
-    Eigen::Map<const Eigen::Matrix<T, 3, 1>> t(translation);
-    Eigen::Map<const Eigen::Matrix<T, 3, 1>> x(point);
-    const Eigen::Matrix<T, 3, 1> p = q * x + t;
-    if (p.z() <= T(Camera::kMinDepth)) {
-      // Behind the camera: a large but finite residual keeps the solver away from here.
-      residual[0] = residual[1] = T(1e3);
-      return true;
-    }
-    const T xn = p.x() / p.z();
-    const T yn = p.y() / p.z();
-    const T r2 = xn * xn + yn * yn;
-    const T d = T(1) + T(k1) * r2 + T(k2) * r2 * r2;
-    residual[0] = focal[0] * d * xn + T(cx) - T(u);
-    residual[1] = focal[0] * T(aspect) * d * yn + T(cy) - T(v);
-    return true;
-  }
-
-  double u, v, cx, cy, k1, k2, aspect;
-};
 
 struct FocalPriorCost {
   FocalPriorCost(double prior, double weight) : prior(prior), weight(weight) {}
@@ -68,8 +37,7 @@ class CancelCallback : public ceres::IterationCallback {
 
 // Ceres works on raw arrays; poses are unpacked here and written back after solving.
 struct PoseBlock {
-  double rotation[4];  // Eigen quaternion storage order: x, y, z, w
-  double translation[3];
+  double cam_from_submap[7];  // Eigen quaternion x, y, z, w; translation (ReprojectionCostFunction)
   double focal;
 };
 
@@ -123,11 +91,8 @@ BundleAdjustmentSummary BundleAdjust(const Intrinsics& intrinsics, std::vector<K
   std::vector<PoseBlock> poses(keyframes.size());
   for (std::size_t k = 0; k < keyframes.size(); ++k) {
     const Eigen::Quaterniond& q = keyframes[k].cam_from_submap.rotation().quaternion();
-    poses[k] = {{q.x(), q.y(), q.z(), q.w()},
-                {keyframes[k].cam_from_submap.translation().x(),
-                 keyframes[k].cam_from_submap.translation().y(),
-                 keyframes[k].cam_from_submap.translation().z()},
-                keyframes[k].focal};
+    const Eigen::Vector3d& t = keyframes[k].cam_from_submap.translation();
+    poses[k] = {{q.x(), q.y(), q.z(), q.w(), t.x(), t.y(), t.z()}, keyframes[k].focal};
   }
 
   // One focal for all keyframes (options.share_focal): starts at the prior's centre, or at the
@@ -147,10 +112,9 @@ BundleAdjustmentSummary BundleAdjust(const Intrinsics& intrinsics, std::vector<K
   std::vector<bool> keyframe_used(keyframes.size(), false);
   for (Landmark& lm : landmarks) {
     for (const Observation& obs : lm.observations) {
-      auto* cost = new ceres::AutoDiffCostFunction<ReprojectionCost, 2, 4, 3, 1, 3>(
-          new ReprojectionCost(obs.pixel.cast<double>(), intrinsics));
+      auto* cost = new ReprojectionCostFunction(obs.pixel.cast<double>(), intrinsics);
       PoseBlock& pose = poses[obs.keyframe];
-      problem.AddResidualBlock(cost, loss, pose.rotation, pose.translation,
+      problem.AddResidualBlock(cost, loss, pose.cam_from_submap,
                                share ? &shared_focal : &pose.focal, lm.point_in_submap.data());
       keyframe_used[obs.keyframe] = true;
     }
@@ -159,16 +123,17 @@ BundleAdjustmentSummary BundleAdjust(const Intrinsics& intrinsics, std::vector<K
   for (std::size_t k = 0; k < keyframes.size(); ++k) {
     if (!keyframe_used[k]) continue;
     PoseBlock& pose = poses[k];
-    problem.SetManifold(pose.rotation, new ceres::EigenQuaternionManifold);
     if (static_cast<int>(k) < options.fixed_keyframes) {
-      problem.SetParameterBlockConstant(pose.rotation);
-      problem.SetParameterBlockConstant(pose.translation);
+      problem.SetParameterBlockConstant(pose.cam_from_submap);
     } else if (k == 1 && options.fix_scale && options.fixed_keyframes == 1) {
+      const double* t = pose.cam_from_submap + 4;
       int largest = 0;
       for (int i = 1; i < 3; ++i) {
-        if (std::abs(pose.translation[i]) > std::abs(pose.translation[largest])) largest = i;
+        if (std::abs(t[i]) > std::abs(t[largest])) largest = i;
       }
-      problem.SetManifold(pose.translation, new ceres::SubsetManifold(3, {largest}));
+      problem.SetManifold(pose.cam_from_submap, NewPoseManifold(largest));
+    } else {
+      problem.SetManifold(pose.cam_from_submap, NewPoseManifold());
     }
     if (share) continue;
     if (options.refine_focal) {
@@ -201,9 +166,9 @@ BundleAdjustmentSummary BundleAdjust(const Intrinsics& intrinsics, std::vector<K
 
   for (std::size_t k = 0; k < keyframes.size(); ++k) {
     const PoseBlock& pose = poses[k];
+    const double* x = pose.cam_from_submap;
     keyframes[k].cam_from_submap =
-        SE3(SO3(Eigen::Quaterniond(pose.rotation[3], pose.rotation[0], pose.rotation[1], pose.rotation[2])),
-            Eigen::Vector3d(pose.translation[0], pose.translation[1], pose.translation[2]));
+        SE3(SO3(Eigen::Quaterniond(x[3], x[0], x[1], x[2])), Eigen::Vector3d(x[4], x[5], x[6]));
     keyframes[k].focal = share ? shared_focal : pose.focal;
   }
   summary.final_rms_pixels = RmsReprojection(intrinsics, keyframes, landmarks);

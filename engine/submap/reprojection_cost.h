@@ -1,0 +1,47 @@
+// The pixel residual of bundle adjustment with hand-written Jacobians. Bundle adjustment is the
+// submap builder's largest cost; with ceres::AutoDiffCostFunction (11-dimensional jets) the
+// Jacobian evaluation of a 20-keyframe submap took ~30 ms per iteration here, and the pose as
+// two parameter blocks (rotation, translation) kept Ceres on its generic ("2,3,d") Schur
+// eliminator. One 7-dimensional pose block with a 6-dimensional tangent space lets it use the
+// fixed-size <2,3,6> specialisation (docs/benchmarks.md, "bundle adjustment").
+//
+// Parameter blocks, in order:
+//   cam_from_submap  7: Eigen quaternion storage (x, y, z, w), then translation (x, y, z);
+//                       use PoseManifold() (quaternion x Euclidean) for it
+//   focal            1: fx in pixels (fy = fx * aspect of the camera)
+//   point_in_submap  3
+// The rotation is applied as Eigen's quaternion-vector product, which assumes a unit
+// quaternion; the Jacobian is that of the same formula, so it is exact for any quaternion the
+// manifold produces. Principal point and distortion (k1, k2) are constants of the camera:
+// too weakly observed inside one submap to refine.
+#pragma once
+
+#include <ceres/manifold.h>
+#include <ceres/sized_cost_function.h>
+#include <Eigen/Core>
+
+#include "engine/core/camera.h"
+
+namespace glam {
+
+class ReprojectionCostFunction final : public ceres::SizedCostFunction<2, 7, 1, 3> {
+ public:
+  // Residual of a point behind (or on) the camera plane, with zero Jacobians: large but finite,
+  // so the solver turns back instead of failing.
+  static constexpr double kBehindCameraResidual = 1e3;
+
+  ReprojectionCostFunction(const Eigen::Vector2d& observed_pixel, const Intrinsics& intrinsics);
+
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override;
+
+ private:
+  Eigen::Vector2d observed_;
+  double cx_, cy_, k1_, k2_, aspect_;
+};
+
+// Quaternion (Eigen order) x R^3 for the 7-dimensional pose block. scale_axis = 0, 1 or 2
+// holds that translation coordinate fixed (the monocular scale gauge); -1 = none.
+ceres::Manifold* NewPoseManifold(int scale_axis = -1);
+
+}  // namespace glam
