@@ -33,6 +33,7 @@ struct MapArgs {
   bool per_keyframe_focal = false;
   std::string vocabulary_path;
   bool max_features_given = false;  // --max-features on the command line
+  bool paper = false;
   MappingOptions options;
 };
 
@@ -77,6 +78,7 @@ void DrawProgress(const MappingProgress& p, bool tty) {
 }
 
 void RunMap(MapArgs& args) {
+  if (args.paper) UsePaperMethod(&args.options);  // the options it sets exclude --paper
   if (!args.intrinsics_path.empty()) {
     args.options.intrinsics = ReadIntrinsicsJson(args.intrinsics_path);
     // A calibration is trusted: its focal stays fixed unless asked otherwise (on flat nadir
@@ -181,6 +183,16 @@ void RegisterMapCommand(CLI::App& app) {
                   "Spread each frame's SIFT features over a grid of this many columns (rows from "
                   "the aspect ratio), strongest first per cell; 0 = strongest over the frame (the paper)")
       ->capture_default_str();
+  // The paper's method: the options it sets cannot be combined with it (CLI11 reports which).
+  CLI::Option* paper = cmd->add_flag(
+      "--paper", args->paper,
+      "Run the paper's method where the defaults deviate from it (SIFT on every frame, no "
+      "feature grid, no parallax keyframe rules, per-keyframe focal, no completion bundle "
+      "adjustment, ...; docs/algorithm.md); slower");
+  for (const char* name : {"--detect-every", "--feature-grid", "--keyframe-parallax",
+                           "--bootstrap-parallax", "--completion-ba-frames", "--per-keyframe-focal"}) {
+    paper->excludes(name);
+  }
   cmd->add_flag("--resume", args->options.resume,
                "Continue an interrupted run in the same --out from its last completed submap "
                "(checkpoint.json); without a usable checkpoint the run starts from the beginning");

@@ -48,7 +48,9 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // --help and --version exit 0; a usage error is bad input like any other (exit 2), not one
+    // of CLI11's own codes (105, 108, ...).
+    return app.exit(e) == 0 ? EXIT_SUCCESS : kExitInputError;
   } catch (const glam::InputError& e) {
     std::cerr << "glam: error: " << e.what() << "\n";
     return kExitInputError;

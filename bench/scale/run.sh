@@ -7,6 +7,7 @@
 # frames per CPU second is the measure that other processes' load does not distort. Writes out/bench/scale/<FRAMES>/{samples.tsv,
 # summary.md} and the plot docs/images/bench/scale_fps_rss.png.
 # Usage: bench/scale/run.sh [BUILD_DIR] [FRAMES]   (defaults: build, 20000)
+#   REUSE_VIDEO=1: map the flight rendered by an earlier run again (rendering takes ~15 min).
 # Runs under `nice -n 10`; takes about an hour on 2 cores (render + map).
 set -euo pipefail
 # Debian's python3 (numpy, matplotlib from bench/colmap/setup.sh), not a pyenv/venv one.
@@ -23,10 +24,14 @@ cd "$ROOT"
 
 echo "commit $(git rev-parse --short HEAD 2>/dev/null || echo unknown), $(nproc) cores" | tee "$WORK/machine.txt"
 
-synth_start=$(date +%s)
-nice -n 10 "$GLAM" --log-level warn synth --trajectory lawnmower --frames "$FRAMES" --width 640 \
-  --height 360 --altitude 100 --seed 11 --crf 20 --out "$WORK/gt"
-echo "synth_seconds $(( $(date +%s) - synth_start ))" | tee "$WORK/synth_time.txt"
+if [ "${REUSE_VIDEO:-0}" = 1 ] && [ -f "$WORK/gt/video.mp4" ] && [ -f "$WORK/gt/synth.json" ]; then
+  echo "reusing the rendered flight in $WORK/gt (REUSE_VIDEO=1)"
+else
+  synth_start=$(date +%s)
+  nice -n 10 "$GLAM" --log-level warn synth --trajectory lawnmower --frames "$FRAMES" --width 640 \
+    --height 360 --altitude 100 --seed 11 --crf 20 --out "$WORK/gt"
+  echo "synth_seconds $(( $(date +%s) - synth_start ))" | tee "$WORK/synth_time.txt"
+fi
 ls -l "$WORK/gt/video.mp4"
 
 rm -rf "$WORK/map"

@@ -31,6 +31,22 @@ int MappingOptions::EffectiveDetectionInterval(double fps) const {
   return std::max(1, static_cast<int>(std::lround(frames_per_second * kAutoDetectionSeconds)));
 }
 
+void UsePaperMethod(MappingOptions* options) {
+  options->detection_interval = 1;
+  options->sift.grid_cols = 0;
+  options->sift.grid_rows = 0;
+  SubmapOptions& submap = options->submap;
+  submap.max_keyframe_parallax_deg = 0;
+  submap.bootstrap_accept_parallax_deg = 0;
+  submap.bundle_adjustment.share_focal = false;
+  submap.focal_prior_growth = 0;
+  submap.rebuild_focal_change = 0;
+  submap.completion_ba_max_frames = 0;
+  submap.extend_short_final_submap = false;
+  options->alignment.use_shared_frames = false;
+  options->alignment.local_window = 0;
+}
+
 Intrinsics ResolveIntrinsics(const MappingOptions& options, const FrameSourceInfo& info) {
   const double s = info.scale;
   Intrinsics out;

@@ -63,6 +63,20 @@ struct MappingOptions {
 // frames (~0.17 s), short enough for the ground to shift by a fraction of the image only.
 inline constexpr double kAutoDetectionSeconds = 0.2;
 
+// Switches `options` to the paper's method wherever this implementation deviates from it by
+// default and an option exists (docs/algorithm.md gives each deviation and its measured
+// reason): SIFT on every frame, strongest features over the whole frame (no grid), the
+// paper's keyframe and bootstrap rules alone (no parallax rules), one focal per keyframe under
+// the constant weak prior (no shared focal, no prior growth, no submap rebuild when the focal
+// moves), completion by PnP relocalisation only (no completion bundle adjustment), no
+// extension of a short final submap; thread 2 with landmark-only edges (no shared frames) and
+// whole-graph solves (no local window). Kept, because they have no paper counterpart to go
+// back to or the paper leaves them open: RootSIFT (the built-in vocabulary is trained on it),
+// the inlier thresholds' scaling with the feature count, the outlier filters' parameters, the
+// verifier's checks. For comparing against the paper (`glam map --paper`); slower (~5 fps at
+// 1280x720) and on the synthetic clips less accurate than the defaults.
+void UsePaperMethod(MappingOptions* options);
+
 // Intrinsics at processing size for `info`: the given calibration or focal rescaled by
 // info.scale (pixel centres at integer coordinates: c' = (c + 0.5) s - 0.5), or the default
 // guess with the principal point at the image centre. Throws InputError if a given

@@ -119,6 +119,48 @@ int RunCli(const std::string& args, std::string* output) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
+// The paper preset turns every documented deviation with an option back, and nothing else.
+TEST(MappingOptions, PaperMethodTurnsTheDeviationsOff) {
+  const MappingOptions defaults;
+  MappingOptions paper;
+  UsePaperMethod(&paper);
+  EXPECT_NO_THROW(paper.Check());
+  EXPECT_EQ(paper.detection_interval, 1);
+  EXPECT_EQ(paper.sift.grid_cols, 0);
+  EXPECT_EQ(paper.submap.max_keyframe_parallax_deg, 0.0);
+  EXPECT_EQ(paper.submap.bootstrap_accept_parallax_deg, 0.0);
+  EXPECT_FALSE(paper.submap.bundle_adjustment.share_focal);
+  EXPECT_EQ(paper.submap.focal_prior_growth, 0.0);
+  EXPECT_EQ(paper.submap.rebuild_focal_change, 0.0);
+  EXPECT_EQ(paper.submap.completion_ba_max_frames, 0);
+  EXPECT_FALSE(paper.submap.extend_short_final_submap);
+  EXPECT_FALSE(paper.alignment.use_shared_frames);
+  EXPECT_EQ(paper.alignment.local_window, 0);
+  // The defaults do deviate (else the preset would be a no-op), and the paper's own
+  // parameters are untouched.
+  EXPECT_NE(defaults.detection_interval, 1);
+  EXPECT_GT(defaults.sift.grid_cols, 0);
+  EXPECT_GT(defaults.submap.completion_ba_max_frames, 0);
+  EXPECT_EQ(paper.submap.tau_resection, defaults.submap.tau_resection);
+  EXPECT_EQ(paper.submap.tau_stereo, defaults.submap.tau_stereo);
+  EXPECT_EQ(paper.submap.keyframes_per_submap, defaults.submap.keyframes_per_submap);
+  EXPECT_EQ(paper.submap.overlap_fraction, defaults.submap.overlap_fraction);
+  EXPECT_EQ(paper.sift.max_features, defaults.sift.max_features);
+  EXPECT_EQ(paper.sift.root_sift, defaults.sift.root_sift);
+}
+
+TEST(MapCli, PaperCannotBeCombinedWithTheOptionsItSets) {
+  const fs::path input = NoiseFolder("cli_paper", 2);
+  std::string output;
+  EXPECT_EQ(RunCli("map " + input.string() + " --out " + TempDir("cli_paper_a").string() +
+                       " --paper --detect-every 6", &output), 2);
+  EXPECT_NE(output.find("--paper"), std::string::npos) << output;
+  EXPECT_NE(output.find("--detect-every"), std::string::npos) << output;
+  output.clear();
+  EXPECT_EQ(RunCli("map " + input.string() + " --out " + TempDir("cli_paper_b").string() + " --paper",
+                   &output), 0) << output;
+}
+
 TEST(MapCli, MissingInputExitsTwoWithMessage) {
   std::string output;
   EXPECT_EQ(RunCli("map /nonexistent/clip.mp4 --out " + TempDir("cli_missing").string(), &output), 2);
