@@ -96,7 +96,10 @@ struct RelativePoseResult {
   int iterations = 0;
 };
 
-// RANSAC (RelativeMotionEstimator) + RecoverRelativePose. options.inlier_threshold in pixels.
+// RANSAC (RelativeMotionEstimator), then the homography's decompositions refined on the
+// inliers as alternative motions (the lowest MSAC cost wins: nearly planar scenes have a second,
+// wrong motion whose basin five-point samples often fall into; essential.cc), then
+// RecoverRelativePose. options.inlier_threshold in pixels.
 // success requires options.min_inliers (and 5) inliers after cheirality.
 // max_depth as in RecoverRelativePose: raise it where small baselines are expected (a
 // bootstrap watching parallax grow decides on triangulation angles itself).

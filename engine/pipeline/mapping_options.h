@@ -73,8 +73,8 @@ inline constexpr double kAutoDetectionSeconds = 0.2;
 // whole-graph solves (no local window). Kept, because they have no paper counterpart to go
 // back to or the paper leaves them open: RootSIFT (the built-in vocabulary is trained on it),
 // the inlier thresholds' scaling with the feature count, the outlier filters' parameters, the
-// verifier's checks. For comparing against the paper (`glam map --paper`); slower (~5 fps at
-// 1280x720) and on the synthetic clips less accurate than the defaults.
+// verifier's checks. For comparing against the paper (`glam map --paper`); slower (SIFT on every
+// frame: ~5 fps at 1280x720) and on the synthetic test clips it maps less of the ground.
 void UsePaperMethod(MappingOptions* options);
 
 // Intrinsics at processing size for `info`: the given calibration or focal rescaled by
