@@ -89,6 +89,7 @@ void SubmapGraphOptions::Check() const {
 struct SubmapGraph::SubmapNode {
   Sim3Parameters parameters{};
   double depth_in_submap_units = 1;
+  double log_scale_at_insertion = 0;  // centre of its scale prior
 };
 
 struct SubmapGraph::Observation {
@@ -125,6 +126,7 @@ void SubmapGraph::AddSubmap(std::uint32_t id, const Sim3& world_from_submap_init
   auto node = std::make_unique<SubmapNode>();
   node->parameters = Sim3ToParameters(world_from_submap_initial);
   node->depth_in_submap_units = depth_scale_in_submap_units;
+  node->log_scale_at_insertion = node->parameters[6];
   double* block = node->parameters.data();
   problem_->AddParameterBlock(block, kSim3AmbientSize, manifold_.get());
   if (submaps_.empty()) {
@@ -132,7 +134,7 @@ void SubmapGraph::AddSubmap(std::uint32_t id, const Sim3& world_from_submap_init
     problem_->SetParameterBlockConstant(block);  // gauge
   } else if (options_.scale_prior_weight > 0) {
     problem_->AddResidualBlock(
-        new LogScalePriorFactor(node->parameters[6], options_.scale_prior_weight), nullptr,
+        new LogScalePriorFactor(node->log_scale_at_insertion, options_.scale_prior_weight), nullptr,
         block);
   }
   submaps_.emplace(id, std::move(node));
@@ -223,36 +225,67 @@ void SubmapGraph::AddEdge(std::uint32_t submap_a, std::uint32_t submap_b,
   ++num_edges_;
 }
 
-GraphSolveSummary SubmapGraph::Optimize(CancellationToken cancel) { return Solve(cancel); }
+GraphSolveSummary SubmapGraph::Optimize(CancellationToken cancel) {
+  std::vector<double*> landmark_blocks, submap_blocks;
+  for (const auto& node : landmarks_) {
+    if (node) landmark_blocks.push_back(node->position.data());
+  }
+  for (const auto& [id, node] : submaps_) submap_blocks.push_back(node->parameters.data());
+  return Solve(*problem_, landmark_blocks, submap_blocks, cancel);
+}
 
 GraphSolveSummary SubmapGraph::OptimizeSubset(const std::set<std::uint32_t>& free,
                                               CancellationToken cancel) {
-  // Ceres leaves residuals whose blocks are all constant out of the reduced problem, so
-  // holding the far submaps and the landmark nodes only they observe shrinks the solve to
-  // the window; the held blocks are released again whatever happens in the solve.
-  std::vector<double*> held;
-  for (const auto& [id, node] : submaps_) {
-    if (id == gauge_ || free.contains(id)) continue;
-    held.push_back(node->parameters.data());
-  }
+  // A problem of its own with only the factors of the landmark nodes a free submap observes
+  // (their other observers held), and the free submaps' scale priors: the same problem as
+  // the whole graph with everything else held, without its size. Holding blocks in the
+  // persistent problem instead (Ceres leaves all-constant residuals out of the reduced
+  // problem) still cost every solve a pass over all residual blocks: on a 20,000-frame flight
+  // the optimisation of a local window grew from 0.02 to 0.59 s per submap with the graph
+  // (docs/benchmarks.md).
+  ceres::Problem::Options problem_options;
+  problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::Problem local(problem_options);
+  std::vector<double*> landmark_blocks, submap_blocks;
+  std::set<std::uint32_t> observers;
   for (const auto& node : landmarks_) {
     if (!node) continue;
     const bool seen_by_free = std::any_of(node->observations.begin(), node->observations.end(),
                                           [&](const Observation& o) { return free.contains(o.submap); });
-    if (!seen_by_free) held.push_back(node->position.data());
-  }
-  for (double* block : held) problem_->SetParameterBlockConstant(block);
-  struct Release {
-    ceres::Problem& problem;
-    const std::vector<double*>& blocks;
-    ~Release() {
-      for (double* block : blocks) problem.SetParameterBlockVariable(block);
+    if (!seen_by_free) continue;
+    for (const Observation& o : node->observations) {
+      SubmapNode& submap = *submaps_.at(o.submap);
+      local.AddResidualBlock(new SubmapPointFactor(o.point_in_submap, submap.depth_in_submap_units),
+                             loss_.get(), submap.parameters.data(), node->position.data());
+      observers.insert(o.submap);
     }
-  } release{*problem_, held};
-  return Solve(cancel);
+    landmark_blocks.push_back(node->position.data());
+  }
+  for (std::uint32_t id : observers) {
+    SubmapNode& node = *submaps_.at(id);
+    double* block = node.parameters.data();
+    local.SetManifold(block, manifold_.get());
+    submap_blocks.push_back(block);
+    if (id == gauge_ || !free.contains(id)) {
+      local.SetParameterBlockConstant(block);
+    } else if (options_.scale_prior_weight > 0) {
+      local.AddResidualBlock(new LogScalePriorFactor(node.log_scale_at_insertion, options_.scale_prior_weight),
+                             nullptr, block);
+    }
+  }
+  if (landmark_blocks.empty()) {  // nothing the free submaps observe: nothing to move
+    GraphSolveSummary nothing;
+    nothing.solver = options_.linear_solver;
+    nothing.converged = nothing.usable = true;
+    return nothing;
+  }
+  return Solve(local, landmark_blocks, submap_blocks, cancel);
 }
 
-GraphSolveSummary SubmapGraph::Solve(const CancellationToken& cancel) {
+GraphSolveSummary SubmapGraph::Solve(ceres::Problem& problem, const std::vector<double*>& landmark_blocks,
+                                     const std::vector<double*>& submap_blocks,
+                                     const CancellationToken& cancel) {
   const auto start = std::chrono::steady_clock::now();
   GraphSolveSummary summary;
   summary.solver = options_.linear_solver;
@@ -267,17 +300,15 @@ GraphSolveSummary SubmapGraph::Solve(const CancellationToken& cancel) {
       solver_options.linear_solver_type == ceres::SPARSE_SCHUR) {
     // Eliminate landmarks first, then solve for the submaps (what the Schur solvers are for).
     auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
-    for (const auto& node : landmarks_) {
-      if (node) ordering->AddElementToGroup(node->position.data(), 0);
-    }
-    for (const auto& [id, node] : submaps_) ordering->AddElementToGroup(node->parameters.data(), 1);
+    for (double* block : landmark_blocks) ordering->AddElementToGroup(block, 0);
+    for (double* block : submap_blocks) ordering->AddElementToGroup(block, 1);
     if (ordering->GroupSize(0) > 0) solver_options.linear_solver_ordering = ordering;
   }
   CancelCallback cancel_callback(cancel);
   solver_options.callbacks.push_back(&cancel_callback);
 
   ceres::Solver::Summary ceres_summary;
-  ceres::Solve(solver_options, problem_.get(), &ceres_summary);
+  ceres::Solve(solver_options, &problem, &ceres_summary);
   // Ceres calls the callback from iteration 0 on, and an aborted solve leaves the parameter
   // blocks as they were before it: the graph stays consistent.
   cancel.ThrowIfCancelled();
@@ -293,9 +324,10 @@ GraphSolveSummary SubmapGraph::Solve(const CancellationToken& cancel) {
   if (!summary.usable) {
     GLAM_LOG_WARN("submap graph solve failed: {}", ceres_summary.message);
   }
-  GLAM_LOG_DEBUG("submap graph: {} submaps, {} landmarks, {} factors, {} ({}), {} iterations, "
+  GLAM_LOG_DEBUG("submap graph: {} of {} submaps, {} of {} landmarks, {} factors, {} ({}), {} iterations, "
                  "cost {:.4g} -> {:.4g}, {:.3f} s",
-                 submaps_.size(), num_landmarks_, num_observations_,
+                 submap_blocks.size(), submaps_.size(), landmark_blocks.size(), num_landmarks_,
+                 problem.NumResidualBlocks(),
                  ToString(options_.linear_solver), ceres_summary.message, summary.iterations,
                  summary.initial_cost, summary.final_cost, summary.seconds);
   return summary;

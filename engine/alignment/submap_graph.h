@@ -158,7 +158,9 @@ class SubmapGraph {
   std::size_t Merge(std::size_t a, std::size_t b);
   void AddFactor(LandmarkNode& node, const Observation& observation);
   Eigen::Vector3d ObservedInWorld(const Observation& observation) const;
-  GraphSolveSummary Solve(const CancellationToken& cancel);
+  // Solves `problem` (the persistent one, or a subset's) with landmarks eliminated first.
+  GraphSolveSummary Solve(ceres::Problem& problem, const std::vector<double*>& landmark_blocks,
+                          const std::vector<double*>& submap_blocks, const CancellationToken& cancel);
 
   SubmapGraphOptions options_;
   std::unique_ptr<Sim3Manifold> manifold_;
