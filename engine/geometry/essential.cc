@@ -13,13 +13,22 @@
 #include "engine/core/error.h"
 
 namespace glam {
+namespace {
+
+// The two views' normalised coordinates as OpenCV point lists.
+void ToCvPoints(std::span<const TwoViewCorrespondence> data, std::vector<cv::Point2d>* p1,
+                std::vector<cv::Point2d>* p2) {
+  for (const auto& d : data) {
+    p1->emplace_back(d.x1.x(), d.x1.y());
+    p2->emplace_back(d.x2.x(), d.x2.y());
+  }
+}
+
+}  // namespace
 
 std::vector<Eigen::Matrix3d> EssentialEstimator::Fit(std::span<const Datum> sample) const {
   std::vector<cv::Point2d> p1, p2;
-  for (const auto& d : sample) {
-    p1.emplace_back(d.x1.x(), d.x1.y());
-    p2.emplace_back(d.x2.x(), d.x2.y());
-  }
+  ToCvPoints(sample, &p1, &p2);
   cv::Mat stacked;
   try {
     // With exactly five points OpenCV's RANSAC wrapper runs the five-point kernel once and
@@ -247,10 +256,7 @@ std::vector<RelativeMotionEstimator::Model> HomographySeeds(std::span<const TwoV
                                                             std::span<const TwoViewCorrespondence> inliers,
                                                             double threshold_normalised) {
   std::vector<cv::Point2d> p1, p2;
-  for (const auto& d : data) {
-    p1.emplace_back(d.x1.x(), d.x1.y());
-    p2.emplace_back(d.x2.x(), d.x2.y());
-  }
+  ToCvPoints(data, &p1, &p2);
   std::vector<RelativeMotionEstimator::Model> seeds;
   cv::Mat H;
   try {

@@ -4,18 +4,9 @@
 #include <Eigen/Geometry>
 
 #include "engine/core/error.h"
+#include "engine/core/so3.h"
 
 namespace glam {
-namespace {
-
-// [v]x, the cross-product matrix: Skew(v) * x = v.cross(x).
-Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d m;
-  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return m;
-}
-
-}  // namespace
 
 ReprojectionCostFunction::ReprojectionCostFunction(const Eigen::Vector2d& observed_pixel,
                                                    const Intrinsics& intrinsics)
@@ -66,7 +57,7 @@ bool ReprojectionCostFunction::Evaluate(double const* const* parameters, double*
     Eigen::Map<Eigen::Matrix<double, 2, 7, Eigen::RowMajor>> j(jacobians[0]);
     // d p / d v = 2w d(v x x)/dv + 2 d(v x (v x x))/dv, with d(v x x)/dv = -[x]x and
     // v x (v x x) = v (v.x) - x (v.v).
-    const Eigen::Matrix3d dp_dv = -2.0 * w * Skew(x) +
+    const Eigen::Matrix3d dp_dv = -2.0 * w * Hat(x) +
                                   2.0 * (v.dot(x) * Eigen::Matrix3d::Identity() + v * x.transpose() -
                                          2.0 * x * v.transpose());
     j.block<2, 3>(0, 0) = dr_dp * dp_dv;
@@ -79,7 +70,7 @@ bool ReprojectionCostFunction::Evaluate(double const* const* parameters, double*
   }
   if (jacobians[2] != nullptr) {
     // d p / d x = I + 2w [v]x + 2 [v]x^2.
-    const Eigen::Matrix3d sv = Skew(v);
+    const Eigen::Matrix3d sv = Hat(v);
     const Eigen::Matrix3d dp_dx = Eigen::Matrix3d::Identity() + 2.0 * w * sv + 2.0 * sv * sv;
     Eigen::Map<Eigen::Matrix<double, 2, 3, Eigen::RowMajor>> j(jacobians[2]);
     j = dr_dp * dp_dx;
