@@ -195,7 +195,8 @@ std::optional<std::size_t> SubmapBuilder::LastTrackedAfterLastKeyframe() const {
 std::vector<Submap> SubmapBuilder::Finish() {
   std::vector<Submap> completed;
   if (options_.extend_short_final_submap && !open_.frames.empty() && !previous_tail_.empty() &&
-      static_cast<int>(open_.keyframes.size()) < options_.keyframes_per_submap) {
+      static_cast<double>(open_.keyframes.size()) <
+          options_.short_final_submap_fraction * options_.keyframes_per_submap) {
     // Tracked again from the previous submap's middle keyframe, at the current focal (so the
     // focal rebuild below has nothing left to do). Also when it is still bootstrapping: its
     // few frames alone make a poor map (measured 1.9 m median error, extended 0.97 m).

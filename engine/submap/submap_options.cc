@@ -38,6 +38,7 @@ void SubmapOptions::Check() const {
   CheckInRange("SubmapOptions.rebuild_focal_change", rebuild_focal_change, 0.0, 1.0);
   CheckGreaterEqual("SubmapOptions.max_submap_rebuilds", max_submap_rebuilds, 0);
   CheckGreaterEqual("SubmapOptions.focal_prior_growth", focal_prior_growth, 0.0);
+  CheckInRange("SubmapOptions.short_final_submap_fraction", short_final_submap_fraction, 0.0, 1.0);
   if (max_keyframe_parallax_deg > 0 && max_keyframe_parallax_deg < 2.0 * min_triangulation_angle_deg) {
     throw InputError("SubmapOptions.max_keyframe_parallax_deg must be 0 or at least twice "
                      "min_triangulation_angle_deg (a keyframe must be able to triangulate)");

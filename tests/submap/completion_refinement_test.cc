@@ -20,9 +20,9 @@
 #include <gtest/gtest.h>
 
 #include "engine/core/intrinsics_io.h"
-#include "engine/core/similarity_alignment.h"
 #include "engine/export/tum_trajectory.h"
 #include "tests/support/clip_runner.h"
+#include "tests/support/submap_accuracy.h"
 #include "tools/eval/ground_truth_surface.h"
 
 namespace glam {
@@ -39,24 +39,13 @@ Accuracy Measure(const test_support::ClipRun& run, const std::vector<TimedPose>&
   Accuracy out;
   std::vector<double> errors;
   for (const Submap& s : run.submaps) {
-    std::vector<Eigen::Vector3d> est, truth;
-    for (const FramePose& fp : s.frame_poses) {
-      est.push_back(fp.cam_from_submap.Inverse().translation());
-      truth.push_back(gt[static_cast<std::size_t>(fp.frame_index)].world_from_cam.translation());
-    }
-    const auto aligned = AlignSimilarity(est, truth);
-    out.mean_submap_ate += aligned.rmse;
-    for (const Landmark& lm : s.landmarks) {
-      const auto d = surface.Distance(aligned.target_from_source * lm.point_in_submap);
-      errors.push_back(d.inside ? d.distance : 1e9);
-    }
+    const test_support::SubmapAccuracy a = test_support::MeasureSubmap(s, gt, surface);
+    out.mean_submap_ate += a.ate;
+    errors.insert(errors.end(), a.point_errors.begin(), a.point_errors.end());
   }
   out.submaps = run.submaps.size();
   if (out.submaps > 0) out.mean_submap_ate /= static_cast<double>(out.submaps);
-  if (!errors.empty()) {
-    std::nth_element(errors.begin(), errors.begin() + static_cast<std::ptrdiff_t>(errors.size() / 2), errors.end());
-    out.map_median = errors[errors.size() / 2];
-  }
+  out.map_median = test_support::MedianOf(std::move(errors));
   return out;
 }
 

@@ -54,6 +54,16 @@ TEST(SubmapOptions, RejectsBadParallaxRules) {
   EXPECT_NO_THROW(o.Check());
 }
 
+TEST(SubmapOptions, RejectsAShortFinalSubmapFractionOutsideZeroToOne) {
+  SubmapOptions o;
+  o.short_final_submap_fraction = -0.1;
+  ExpectRejected(o, "short_final_submap_fraction");
+  o.short_final_submap_fraction = 1.5;
+  ExpectRejected(o, "short_final_submap_fraction");
+  o.short_final_submap_fraction = 1.0;  // every final submap below keyframes_per_submap
+  EXPECT_NO_THROW(o.Check());
+}
+
 TEST(SubmapOptions, ThresholdsScaleWithTheFirstKeyframesFeatures) {
   SubmapOptions o;
   EXPECT_EQ(o.EffectiveTauResection(o.reference_features), o.tau_resection);

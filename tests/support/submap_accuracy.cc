@@ -1,0 +1,35 @@
+#include "tests/support/submap_accuracy.h"
+
+#include <algorithm>
+
+#include "engine/core/similarity_alignment.h"
+
+namespace glam::test_support {
+
+SubmapAccuracy MeasureSubmap(const Submap& submap, const std::vector<TimedPose>& gt_world_from_cam,
+                             const eval::HeightfieldSurface& surface) {
+  std::vector<Eigen::Vector3d> est, truth;
+  for (const FramePose& fp : submap.frame_poses) {
+    est.push_back(fp.cam_from_submap.Inverse().translation());
+    truth.push_back(gt_world_from_cam.at(static_cast<std::size_t>(fp.frame_index)).world_from_cam.translation());
+  }
+  const auto aligned = AlignSimilarity(est, truth);
+  SubmapAccuracy out;
+  out.ate = aligned.rmse;
+  out.gt_world_from_submap = aligned.target_from_source;
+  out.point_errors.reserve(submap.landmarks.size());
+  for (const Landmark& lm : submap.landmarks) {
+    const auto d = surface.Distance(out.gt_world_from_submap * lm.point_in_submap);
+    out.point_errors.push_back(d.inside ? d.distance : 1e9);
+  }
+  return out;
+}
+
+double MedianOf(std::vector<double> values) {
+  if (values.empty()) return 0;
+  const auto mid = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+  std::nth_element(values.begin(), mid, values.end());
+  return *mid;
+}
+
+}  // namespace glam::test_support

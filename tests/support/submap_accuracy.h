@@ -1,0 +1,29 @@
+// Accuracy of one completed submap against a synthetic fixture's ground truth: the ATE of its
+// posed frames' camera centres after a Sim3 fit (gt_world_from_submap), and each landmark's
+// distance to the true surface in that fit. Shared by the clip tests that compare builder
+// configurations on the same clip.
+#pragma once
+
+#include <vector>
+
+#include "engine/core/sim3.h"
+#include "engine/export/tum_trajectory.h"
+#include "engine/map/submap.h"
+#include "tools/eval/ground_truth_surface.h"
+
+namespace glam::test_support {
+
+struct SubmapAccuracy {
+  double ate = 0;                    // RMSE of the frame centres after the Sim3 fit (m)
+  Sim3 gt_world_from_submap;         // the fit
+  std::vector<double> point_errors;  // per landmark, distance to the surface (m); 1e9 outside it
+};
+
+// gt_world_from_cam: the fixture's poses indexed by frame index (gt_trajectory.tum).
+SubmapAccuracy MeasureSubmap(const Submap& submap, const std::vector<TimedPose>& gt_world_from_cam,
+                             const eval::HeightfieldSurface& surface);
+
+// Median of the values (copied); 0 for none.
+double MedianOf(std::vector<double> values);
+
+}  // namespace glam::test_support
