@@ -52,7 +52,7 @@ int Run(int argc, char** argv) {
 
   std::vector<Variant> variants;
   const KltOptions base;  // the product's defaults
-  variants.emplace_back("default (13 px, 3 levels, forward-backward 0.5 px)", base);
+  variants.emplace_back("default (13 px, 3 levels, 0.1 px steps, forward-backward 0.5 px)", base);
   for (double ncc : {0.9, 0.8}) {
     KltOptions o = base;
     o.max_forward_backward_px = 0;
@@ -63,6 +63,11 @@ int Run(int argc, char** argv) {
     KltOptions o = base;
     o.max_forward_backward_px = 0;
     variants.emplace_back("no wrong-track test", o);
+  }
+  for (double eps : {0.03, 0.3}) {
+    KltOptions o = base;
+    o.epsilon_px = eps;
+    variants.emplace_back("iterations stop below " + std::to_string(eps).substr(0, 4) + " px steps", o);
   }
   {
     KltOptions o = base;

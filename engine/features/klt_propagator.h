@@ -31,8 +31,12 @@ struct KltOptions {
   // same accuracy).
   int window_px = 13;
   int pyramid_levels = 3;
+  // Iterations stop when a step is below epsilon_px. 0.1 px instead of 0.03: positions move
+  // by 0.005-0.01 px on average (SIFT locates keypoints to ~0.1-0.3 px), KLT takes ~15 % less
+  // time and the benchmark videos map the same to the millimetre (ATE 0.094 / 0.066 / 0.178
+  // m against 0.093 / 0.066 / 0.178 m) 8-12 % faster (docs/benchmarks.md).
   int max_iterations = 20;
-  double epsilon_px = 0.03;
+  double epsilon_px = 0.1;
   // Track rejected when the mean absolute intensity difference of the matched windows (grey
   // levels, 0-255) exceeds this. Only a coarse guard: the error of a wrong track depends on the
   // image's contrast (on smooth low-contrast ground a wrong window differs by < 10 grey levels).

@@ -159,6 +159,15 @@ Submap SubmapBuilder::Complete() {
     focals += fmt::format(" {:.1f}", kf.focal);
   }
   GLAM_LOG_DEBUG("submap {} keyframe focals:{}", submap.id, focals);
+  // Track length: the BA's stiffness (a landmark seen by two keyframes only pins little).
+  std::size_t observations = 0, seen_twice = 0;
+  for (const Landmark& lm : open_.landmarks) {
+    observations += lm.observations.size();
+    seen_twice += lm.observations.size() <= 2 ? 1 : 0;
+  }
+  GLAM_LOG_DEBUG("submap {}: {:.2f} keyframe observations per landmark, {} of {} landmarks seen by two",
+                 submap.id, static_cast<double>(observations) / std::max<std::size_t>(1, open_.landmarks.size()),
+                 seen_twice, open_.landmarks.size());
   UpdateFocalEstimate();
   ++stats_.submaps_completed;
   GLAM_LOG_INFO("submap {} complete: frames {}-{}, {} keyframes, {} landmarks, {} frames posed, focal {:.1f}",
