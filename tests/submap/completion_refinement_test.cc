@@ -19,8 +19,6 @@
 
 #include <gtest/gtest.h>
 
-#include "engine/core/intrinsics_io.h"
-#include "engine/export/tum_trajectory.h"
 #include "tests/support/clip_runner.h"
 #include "tests/support/submap_accuracy.h"
 #include "tools/eval/ground_truth_surface.h"
@@ -50,20 +48,17 @@ Accuracy Measure(const test_support::ClipRun& run, const std::vector<TimedPose>&
 }
 
 TEST(CompletionRefinement, TrackedFramesInTheFinalBundleAdjustmentImproveTheSubmaps) {
-  const std::filesystem::path dir = std::filesystem::path(GLAM_TEST_FIXTURES_DIR) / "lawnmower_small";
-  const Intrinsics intrinsics = ReadIntrinsicsJson(dir / "intrinsics.json");
-  const std::vector<TimedPose> gt = ReadTumTrajectory(dir / "gt_trajectory.tum");
-  const auto surface = eval::HeightfieldSurface::Load(dir / "gt_surface.json");
-
+  const test_support::ClipTruth clip =
+      test_support::LoadClipTruth(std::filesystem::path(GLAM_TEST_FIXTURES_DIR) / "lawnmower_small");
   SubmapOptions options;
   options.keyframes_per_submap = 6;
   options.bundle_adjustment.refine_focal = false;
   ASSERT_GT(options.completion_ba_max_frames, 0) << "the product default uses the completion BA";
-  const Accuracy refined =
-      Measure(test_support::RunSubmapBuilderOnClip(dir / "video.mp4", intrinsics, options, 0), gt, surface);
+  const Accuracy refined = Measure(test_support::RunSubmapBuilderOnClip(clip.video, clip.intrinsics, options, 0),
+                                   clip.gt_world_from_cam, clip.surface);
   options.completion_ba_max_frames = 0;
-  const Accuracy paper =
-      Measure(test_support::RunSubmapBuilderOnClip(dir / "video.mp4", intrinsics, options, 0), gt, surface);
+  const Accuracy paper = Measure(test_support::RunSubmapBuilderOnClip(clip.video, clip.intrinsics, options, 0),
+                                 clip.gt_world_from_cam, clip.surface);
   std::printf("completion BA: %zu submaps, mean per-submap ATE %.3f m, map median %.3f m\n", refined.submaps,
               refined.mean_submap_ate, refined.map_median);
   std::printf("PnP only:      %zu submaps, mean per-submap ATE %.3f m, map median %.3f m\n", paper.submaps,

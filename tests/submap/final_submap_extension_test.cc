@@ -11,8 +11,6 @@
 
 #include <gtest/gtest.h>
 
-#include "engine/core/intrinsics_io.h"
-#include "engine/export/tum_trajectory.h"
 #include "tests/support/clip_runner.h"
 #include "tests/support/submap_accuracy.h"
 #include "tools/eval/ground_truth_surface.h"
@@ -21,20 +19,16 @@ namespace glam {
 namespace {
 
 TEST(FinalSubmapExtension, ExtendsOnlyAShortFinalSubmapAndThatMakesItsMapBetter) {
-  const std::filesystem::path dir = std::filesystem::path(GLAM_TEST_FIXTURES_DIR) / "lawnmower_small";
-  const Intrinsics intrinsics = ReadIntrinsicsJson(dir / "intrinsics.json");
-  const std::vector<TimedPose> gt = ReadTumTrajectory(dir / "gt_trajectory.tum");
-  const auto surface = eval::HeightfieldSurface::Load(dir / "gt_surface.json");
-
+  const test_support::ClipTruth clip =
+      test_support::LoadClipTruth(std::filesystem::path(GLAM_TEST_FIXTURES_DIR) / "lawnmower_small");
   SubmapOptions options;
   options.keyframes_per_submap = 6;
   options.bundle_adjustment.refine_focal = false;
   ASSERT_TRUE(options.extend_short_final_submap);
   ASSERT_DOUBLE_EQ(options.short_final_submap_fraction, 0.75);
-  const test_support::ClipRun extended =
-      test_support::RunSubmapBuilderOnClip(dir / "video.mp4", intrinsics, options, 0);
+  const test_support::ClipRun extended = test_support::RunSubmapBuilderOnClip(clip.video, clip.intrinsics, options, 0);
   options.short_final_submap_fraction = 0.5;
-  const test_support::ClipRun kept = test_support::RunSubmapBuilderOnClip(dir / "video.mp4", intrinsics, options, 0);
+  const test_support::ClipRun kept = test_support::RunSubmapBuilderOnClip(clip.video, clip.intrinsics, options, 0);
 
   ASSERT_GE(kept.submaps.size(), 2u);
   ASSERT_EQ(extended.submaps.size(), kept.submaps.size());
@@ -64,8 +58,8 @@ TEST(FinalSubmapExtension, ExtendsOnlyAShortFinalSubmapAndThatMakesItsMapBetter)
   EXPECT_GT(long_final.keyframes.size(), short_final.keyframes.size());
   EXPECT_EQ(long_final.last_frame, short_final.last_frame);
 
-  const test_support::SubmapAccuracy short_accuracy = test_support::MeasureSubmap(short_final, gt, surface);
-  const test_support::SubmapAccuracy long_accuracy = test_support::MeasureSubmap(long_final, gt, surface);
+  const test_support::SubmapAccuracy short_accuracy = test_support::MeasureSubmap(short_final, clip.gt_world_from_cam, clip.surface);
+  const test_support::SubmapAccuracy long_accuracy = test_support::MeasureSubmap(long_final, clip.gt_world_from_cam, clip.surface);
   const double short_median = test_support::MedianOf(short_accuracy.point_errors);
   const double long_median = test_support::MedianOf(long_accuracy.point_errors);
   std::printf("final submap unextended: frames %lld-%lld, %zu keyframes, ATE %.3f m, map median %.3f m\n",

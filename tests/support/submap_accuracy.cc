@@ -2,9 +2,15 @@
 
 #include <algorithm>
 
+#include "engine/core/intrinsics_io.h"
 #include "engine/core/similarity_alignment.h"
 
 namespace glam::test_support {
+
+ClipTruth LoadClipTruth(const std::filesystem::path& dir) {
+  return {dir / "video.mp4", ReadIntrinsicsJson(dir / "intrinsics.json"), ReadTumTrajectory(dir / "gt_trajectory.tum"),
+          eval::HeightfieldSurface::Load(dir / "gt_surface.json")};
+}
 
 SubmapAccuracy MeasureSubmap(const Submap& submap, const std::vector<TimedPose>& gt_world_from_cam,
                              const eval::HeightfieldSurface& surface) {

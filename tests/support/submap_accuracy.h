@@ -4,14 +4,25 @@
 // configurations on the same clip.
 #pragma once
 
+#include <filesystem>
 #include <vector>
 
+#include "engine/core/camera.h"
 #include "engine/core/sim3.h"
 #include "engine/export/tum_trajectory.h"
 #include "engine/map/submap.h"
 #include "tools/eval/ground_truth_surface.h"
 
 namespace glam::test_support {
+
+// A synthetic fixture's ground truth (`glam synth` output directory).
+struct ClipTruth {
+  std::filesystem::path video;
+  Intrinsics intrinsics;
+  std::vector<TimedPose> gt_world_from_cam;  // indexed by frame
+  eval::HeightfieldSurface surface;
+};
+ClipTruth LoadClipTruth(const std::filesystem::path& dir);
 
 struct SubmapAccuracy {
   double ate = 0;                    // RMSE of the frame centres after the Sim3 fit (m)
