@@ -52,7 +52,7 @@ int Run(int argc, char** argv) {
 
   std::vector<Variant> variants;
   const KltOptions base;  // the product's defaults
-  variants.emplace_back("default (13 px, 3 levels, 0.1 px steps, forward-backward 0.5 px)", base);
+  variants.emplace_back("default (11 px, 3 levels, 0.1 px steps, forward-backward 0.5 px)", base);
   for (double ncc : {0.9, 0.8}) {
     KltOptions o = base;
     o.max_forward_backward_px = 0;
@@ -76,8 +76,8 @@ int Run(int argc, char** argv) {
   }
   {
     KltOptions o = base;
-    o.window_px = 11;
-    variants.emplace_back("11 px window", o);
+    o.window_px = 13;
+    variants.emplace_back("13 px window (before 2026-12-03)", o);
   }
 
   auto source = OpenFrameSource(argv[1], FrameSourceOptions{});

@@ -8,6 +8,8 @@
 # truth, submaps, rebuilds, posed frames and ATE after Sim3 (`glam eval`).
 #
 # Usage: bench/focal_range.sh [BUILD_DIR]   (default build; outputs in out/bench/focal_range)
+# MAP_ARGS="--klt-window 11" RUN_TAG=klt11 bench/focal_range.sh: every `glam map` also gets
+# MAP_ARGS, and its outputs go to map_<RUN_TAG>_<start> (the clips are rendered once).
 # Takes ~15 minutes on 2 cores (~40 runs of 400-600 frames at 640x360, plus the renders).
 set -euo pipefail
 BUILD_DIR="${1:-build}"
@@ -39,8 +41,9 @@ for name in high_seed2 high_seed3 high_seed5 orbit_wide loop_narrow lawn_fast; d
       guess) args=() ;;
       *) args=(--focal "$(python3 -c "import sys; print(float(sys.argv[1]) * float(sys.argv[2]))" "$truth" "$start")") ;;
     esac
-    out="$WORK/$name/map_$start"
-    "$GLAM" --log-level warn map "$WORK/$name/gt/video.mp4" "${args[@]}" --out "$out" > "$out.log" 2>&1 \
+    out="$WORK/$name/map_${RUN_TAG:+${RUN_TAG}_}$start"
+    # shellcheck disable=SC2086  # MAP_ARGS are words
+    "$GLAM" --log-level warn map "$WORK/$name/gt/video.mp4" "${args[@]}" ${MAP_ARGS:-} --out "$out" > "$out.log" 2>&1 \
       || { tail -5 "$out.log"; exit 1; }
     "$GLAM" --log-level warn eval --gt "$WORK/$name/gt" --result "$out" --json "$out/eval.json" > /dev/null
     python3 - "$out" "$truth" "$name" "$start" <<'PY'

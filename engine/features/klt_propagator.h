@@ -26,10 +26,13 @@ namespace glam {
 struct KltOptions {
   // Lucas-Kanade window (pixels, odd) and pyramid levels above the base. Every frame starts
   // from the previous frame's positions, so the pyramid only has to bridge one frame of motion:
-  // 13 x 13 with 3 levels reaches ~50 px. Cost per 2000 points at 720p, forward + backward:
-  // ~30 ms (15 x 15: ~45 ms; 1280x720 lawnmower benchmark 18.8 fps vs 13.4 fps end to end,
-  // same accuracy).
-  int window_px = 13;
+  // 11 x 11 with 3 levels reaches ~40 px. 11 instead of 13 (2026-12-03): KLT ~30 % cheaper
+  // (640x360, one core: 16.7 vs 24.4 ms per frame), positions 0.06 px apart, and on 26 runs of
+  // bench/focal_range.sh every focal start still converged with ATE equal or better (seed 3
+  // from +100 %: 0.198 vs 1.05 m); benchmark videos 0.090 / 0.067 / 0.197 m against
+  // 0.094 / 0.066 / 0.178 m (docs/benchmarks.md). Earlier, 15 -> 13 gave 1280x720 lawnmower
+  // 13.4 -> 18.8 fps at the same accuracy.
+  int window_px = 11;
   int pyramid_levels = 3;
   // Iterations stop when a step is below epsilon_px. 0.1 px instead of 0.03: positions move
   // by 0.005-0.01 px on average (SIFT locates keypoints to ~0.1-0.3 px), KLT takes ~15 % less
