@@ -27,7 +27,7 @@ struct KltOptions {
   // Lucas-Kanade window (pixels, odd) and pyramid levels above the base. Every frame starts
   // from the previous frame's positions, so the pyramid only has to bridge one frame of motion:
   // 11 x 11 with 3 levels reaches ~40 px. 11 instead of 13 (2026-12-03): KLT ~30 % cheaper
-  // (640x360, one core: 16.7 vs 24.4 ms per frame), positions 0.06 px apart, and on 26 runs of
+  // (640x360, one core: 16.7 vs 24.4 ms per frame), positions 0.06 px apart, and on the 29 runs of
   // bench/focal_range.sh every focal start still converged with ATE equal or better (seed 3
   // from +100 %: 0.198 vs 1.05 m); benchmark videos 0.090 / 0.067 / 0.197 m against
   // 0.094 / 0.066 / 0.178 m (docs/benchmarks.md). Earlier, 15 -> 13 gave 1280x720 lawnmower

@@ -15,10 +15,10 @@
 
 #include <gtest/gtest.h>
 
-#include "engine/core/intrinsics_io.h"
 #include "engine/core/similarity_alignment.h"
 #include "engine/export/tum_trajectory.h"
 #include "tests/support/clip_runner.h"
+#include "tests/support/submap_accuracy.h"
 #include "tools/eval/ground_truth_surface.h"
 
 namespace glam {
@@ -43,10 +43,8 @@ template <typename S>
 class SubmapBuilderOnSyntheticClip : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    const std::filesystem::path dir = std::filesystem::path(GLAM_TEST_FIXTURES_DIR) / S::clip();
-    intrinsics_ = new Intrinsics(ReadIntrinsicsJson(dir / "intrinsics.json"));
-    gt_ = new std::vector<TimedPose>(ReadTumTrajectory(dir / "gt_trajectory.tum"));
-    surface_ = new eval::HeightfieldSurface(eval::HeightfieldSurface::Load(dir / "gt_surface.json"));
+    clip_ = new test_support::ClipTruth(
+        test_support::LoadClipTruth(std::filesystem::path(GLAM_TEST_FIXTURES_DIR) / S::clip()));
 
     SubmapOptions options;
     options.keyframes_per_submap = 6;
@@ -59,15 +57,13 @@ class SubmapBuilderOnSyntheticClip : public ::testing::Test {
       sift.grid_cols = 0;
     }
     test_support::ClipRun run =
-        test_support::RunSubmapBuilderOnClip(dir / "video.mp4", *intrinsics_, options, S::interval, -1, sift);
+        test_support::RunSubmapBuilderOnClip(clip_->video, clip_->intrinsics, options, S::interval, -1, sift);
     submaps_ = new std::vector<Submap>(std::move(run.submaps));
     frames_ = run.frames;
     focal_ = run.focal;
   }
   static void TearDownTestSuite() {
-    delete intrinsics_;
-    delete gt_;
-    delete surface_;
+    delete clip_;
     delete submaps_;
   }
 
@@ -75,17 +71,8 @@ class SubmapBuilderOnSyntheticClip : public ::testing::Test {
   static void FrameCentres(const Submap& s, std::vector<Eigen::Vector3d>* est, std::vector<Eigen::Vector3d>* truth) {
     for (const FramePose& fp : s.frame_poses) {
       est->push_back(fp.cam_from_submap.Inverse().translation());
-      truth->push_back((*gt_)[static_cast<std::size_t>(fp.frame_index)].world_from_cam.translation());
+      truth->push_back(clip_->gt_world_from_cam[static_cast<std::size_t>(fp.frame_index)].world_from_cam.translation());
     }
-  }
-
-  // Sim3 gt_world_from_submap fitted on the submap's camera centres (rmse = ATE).
-  static Sim3 AlignToGroundTruth(const Submap& s, double* rmse) {
-    std::vector<Eigen::Vector3d> est, truth;
-    FrameCentres(s, &est, &truth);
-    const auto aligned = AlignSimilarity(est, truth);
-    *rmse = aligned.rmse;
-    return aligned.target_from_source;
   }
 
   // The map is compared in the frame of the submap's whole estimated trajectory: every posed
@@ -100,22 +87,18 @@ class SubmapBuilderOnSyntheticClip : public ::testing::Test {
     const double ahead = kAltitude / AlignSimilarity(est, truth).target_from_source.scale();
     for (const FramePose& fp : s.frame_poses) {
       est.push_back(fp.cam_from_submap.Inverse() * Eigen::Vector3d(0, 0, ahead));
-      truth.push_back((*gt_)[static_cast<std::size_t>(fp.frame_index)].world_from_cam * Eigen::Vector3d(0, 0, kAltitude));
+      truth.push_back(clip_->gt_world_from_cam[static_cast<std::size_t>(fp.frame_index)].world_from_cam * Eigen::Vector3d(0, 0, kAltitude));
     }
     return AlignSimilarity(est, truth).target_from_source;
   }
 
-  static Intrinsics* intrinsics_;
-  static std::vector<TimedPose>* gt_;
-  static eval::HeightfieldSurface* surface_;
+  static test_support::ClipTruth* clip_;
   static std::vector<Submap>* submaps_;
   static std::int64_t frames_;
   static double focal_;
 };
 
-template <typename S> Intrinsics* SubmapBuilderOnSyntheticClip<S>::intrinsics_ = nullptr;
-template <typename S> std::vector<TimedPose>* SubmapBuilderOnSyntheticClip<S>::gt_ = nullptr;
-template <typename S> eval::HeightfieldSurface* SubmapBuilderOnSyntheticClip<S>::surface_ = nullptr;
+template <typename S> test_support::ClipTruth* SubmapBuilderOnSyntheticClip<S>::clip_ = nullptr;
 template <typename S> std::vector<Submap>* SubmapBuilderOnSyntheticClip<S>::submaps_ = nullptr;
 template <typename S> std::int64_t SubmapBuilderOnSyntheticClip<S>::frames_ = 0;
 template <typename S> double SubmapBuilderOnSyntheticClip<S>::focal_ = 0;
@@ -124,7 +107,7 @@ using Configs = ::testing::Types<DefaultsOnSeed1, PaperOnSeed1, DefaultsOnSeed4>
 TYPED_TEST_SUITE(SubmapBuilderOnSyntheticClip, Configs);
 
 TYPED_TEST(SubmapBuilderOnSyntheticClip, BuildsSeveralSubmapsAndPosesAlmostEveryFrame) {
-  ASSERT_EQ(TestFixture::frames_, static_cast<std::int64_t>(TestFixture::gt_->size()));
+  ASSERT_EQ(TestFixture::frames_, static_cast<std::int64_t>(TestFixture::clip_->gt_world_from_cam.size()));
   EXPECT_GE(TestFixture::submaps_->size(), 3u);
   std::set<std::int64_t> posed;
   for (const Submap& s : *TestFixture::submaps_) {
@@ -141,8 +124,7 @@ TYPED_TEST(SubmapBuilderOnSyntheticClip, BuildsSeveralSubmapsAndPosesAlmostEvery
 TYPED_TEST(SubmapBuilderOnSyntheticClip, PerSubmapTrajectoryIsAccurate) {
   ASSERT_FALSE(TestFixture::submaps_->empty());
   for (const Submap& s : *TestFixture::submaps_) {
-    double rmse = 0;
-    TestFixture::AlignToGroundTruth(s, &rmse);
+    const double rmse = test_support::MeasureSubmap(s, TestFixture::clip_->gt_world_from_cam, TestFixture::clip_->surface).ate;
     EXPECT_LT(rmse, 0.002 * kAltitude) << "submap " << s.id << " with " << s.frame_poses.size() << " frames";
   }
 }
@@ -157,11 +139,11 @@ TYPED_TEST(SubmapBuilderOnSyntheticClip, MapCoversTheFlownOverGround) {
     std::vector<double> own, height_errors;  // distances; signed heights above the truth
     for (const Landmark& lm : s.landmarks) {
       const Eigen::Vector3d p = gt_from_submap * lm.point_in_submap;
-      const auto d = TestFixture::surface_->Distance(p);
+      const auto d = TestFixture::clip_->surface.Distance(p);
       errors.push_back(d.inside ? d.distance : 1e9);
       own.push_back(errors.back());
-      if (TestFixture::surface_->Contains(p.x(), p.y())) {
-        height_errors.push_back(p.z() - TestFixture::surface_->HeightAt(p.x(), p.y()));
+      if (TestFixture::clip_->surface.Contains(p.x(), p.y())) {
+        height_errors.push_back(p.z() - TestFixture::clip_->surface.HeightAt(p.x(), p.y()));
       }
       covered.insert({static_cast<int>(std::floor(p.x() / kCell)), static_cast<int>(std::floor(p.y() / kCell))});
     }
@@ -175,17 +157,17 @@ TYPED_TEST(SubmapBuilderOnSyntheticClip, MapCoversTheFlownOverGround) {
   std::nth_element(errors.begin(), errors.begin() + static_cast<std::ptrdiff_t>(errors.size() / 2), errors.end());
 
   // Flown-over ground: 10 m cells whose centre (on the true surface) is seen by some frame.
-  const Camera camera(*TestFixture::intrinsics_);
+  const Camera camera(TestFixture::clip_->intrinsics);
   std::set<std::pair<int, int>> seen;
-  for (std::size_t f = 0; f < TestFixture::gt_->size(); f += 5) {
-    const SE3 cam_from_world = (*TestFixture::gt_)[f].world_from_cam.Inverse();
-    const Eigen::Vector3d c = (*TestFixture::gt_)[f].world_from_cam.translation();
+  for (std::size_t f = 0; f < TestFixture::clip_->gt_world_from_cam.size(); f += 5) {
+    const SE3 cam_from_world = TestFixture::clip_->gt_world_from_cam[f].world_from_cam.Inverse();
+    const Eigen::Vector3d c = TestFixture::clip_->gt_world_from_cam[f].world_from_cam.translation();
     for (int i = static_cast<int>((c.x() - 300) / kCell); i <= static_cast<int>((c.x() + 300) / kCell); ++i) {
       for (int j = static_cast<int>((c.y() - 300) / kCell); j <= static_cast<int>((c.y() + 300) / kCell); ++j) {
         const double x = (i + 0.5) * kCell, y = (j + 0.5) * kCell;
-        if (!TestFixture::surface_->Contains(x, y)) continue;
+        if (!TestFixture::clip_->surface.Contains(x, y)) continue;
         Eigen::Vector2d px;
-        if (camera.Project(cam_from_world * Eigen::Vector3d(x, y, TestFixture::surface_->HeightAt(x, y)), &px) &&
+        if (camera.Project(cam_from_world * Eigen::Vector3d(x, y, TestFixture::clip_->surface.HeightAt(x, y)), &px) &&
             camera.InImage(px)) {
           seen.insert({i, j});
         }
