@@ -16,6 +16,8 @@ RESULTS = {"glam_intrinsics": ("GLAM, EXIF focal as intrinsics, 2000 features", 
            "glam_no_intrinsics": ("GLAM, no intrinsics, 2000 features", "glam_no_intrinsics/trajectory.tum"),
            "glam_intrinsics_8000": ("GLAM, EXIF focal, 8000 features (folder default)",
                                     "glam_intrinsics_8000/trajectory.tum"),
+           "glam_refine_8000": ("GLAM, EXIF focal refined (--refine-focal), 8000 features",
+                                "glam_refine_8000/trajectory.tum"),
            "colmap": ("COLMAP (exhaustive)", "colmap/result/trajectory.tum")}
 
 
@@ -65,7 +67,7 @@ def main():
     fig, ax = plt.subplots(figsize=(8, 5), dpi=80)
     g = np.array([gps[i] for i in sorted(gps)])
     ax.plot(g[:, 0], g[:, 1], "k-o", ms=4, lw=2, alpha=0.3, label="GPS")
-    for (label, (idx, al)), style in zip(tracks.items(), ("C0x-", "C2+-", "C1^-", "C3.-")):
+    for (label, (idx, al)), style in zip(tracks.items(), ("C0x-", "C2+-", "C1^-", "C4v-", "C3.-")):
         ax.plot(al[:, 0], al[:, 1], style, ms=6, lw=1, label=f"{label} ({len(idx)} images)")
     ax.set_aspect("equal")
     ax.set_xlabel("east (m)")
