@@ -136,7 +136,9 @@ void RegisterMapCommand(CLI::App& app) {
   cmd->add_option("input", args->input, "Video file (MP4/MOV/MKV) or folder of images")->required();
   cmd->add_option("--out", args->out, "Output directory")->required();
   cmd->add_option("--intrinsics", args->intrinsics_path,
-                  "intrinsics.json at the input's original resolution");
+                  "intrinsics.json at the input's original resolution (a calibration: its focal is "
+                  "kept fixed unless --refine-focal; for a focal from EXIF or a data sheet add --refine-focal "
+                  "or use --focal)");
   cmd->add_option("--focal", args->focal,
                   "Focal length in pixels at original resolution (default: 0.8 x long side, refined)");
   cmd->add_flag("--refine-focal", args->refine_focal,
@@ -149,7 +151,8 @@ void RegisterMapCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--stride", args->options.source.stride, "Use every N-th frame")->capture_default_str();
   cmd->add_option("--keyframes-per-submap", args->options.submap.keyframes_per_submap,
-                  "Keyframes at which a submap is completed")
+                  "Keyframes at which a submap is completed (a loop is closed only when it spans at "
+                  "least three submaps: try 12 for footage that is one short orbit)")
       ->capture_default_str();
   cmd->add_option("--keyframe-parallax", args->options.submap.max_keyframe_parallax_deg,
                   "A tracked frame at this median parallax (deg) to the last keyframe becomes a "
