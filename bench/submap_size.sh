@@ -12,7 +12,7 @@
 # Usage: bench/submap_size.sh [BUILD_DIR]   (default build; outputs in out/bench/submap_size)
 #   SEEDS="21 22 23 24 25" SIZES="20 16 12" (the defaults) choose the clips and submap sizes;
 #   MAP_ARGS are passed to every `glam map`.
-# Takes ~6 minutes on 2 cores with the defaults (15 runs of 600 frames at 640x360 + renders).
+# Takes ~7 minutes on 2 cores with the defaults (15 runs of 600 frames at 640x360 + renders).
 set -euo pipefail
 BUILD_DIR="${1:-build}"
 GLAM="$BUILD_DIR/server/glam"

@@ -6,7 +6,7 @@
 # the EXIF focal guess and refined). Reports registered images, horizontal error of the camera
 # centres against GPS after a Sim3 fit (3D Umeyama on all registered centres) and run time.
 # Writes out/bench/real/table.md and docs/images/bench/real_topview.png.
-# GLAM runs three ways: EXIF focal as fixed intrinsics with 2000 SIFT features (the video
+# GLAM runs four ways: EXIF focal as fixed intrinsics with 2000 SIFT features (the video
 # default), no intrinsics (focal estimated) with 2000, and intrinsics with 8000 features (the
 # default of `glam map` for image folders since this benchmark showed the difference), and the
 # last with `--refine-focal`: the EXIF focal is a guess, and COLMAP refines its own start too.
