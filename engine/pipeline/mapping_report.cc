@@ -1,6 +1,7 @@
 #include "engine/pipeline/mapping_report.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include <fmt/format.h>
 
@@ -64,6 +65,15 @@ std::vector<std::string> Diagnose(const MappingReport& r, int min_features) {
     warnings.push_back(fmt::format("{} of {} frames could not be posed (see trajectory.tum)",
                                    r.frames_unposed, r.frames_decoded));
   }
+  if (r.free_focal_original && r.focal_original > 0 &&
+      std::abs(*r.free_focal_original / r.focal_original - 1.0) > kFixedFocalWarningFraction) {
+    warnings.push_back(fmt::format(
+        "the fixed focal length ({:.1f} px) looks {:+.0f} % off: let free, the first submap's "
+        "bundle adjustment moves it to {:.1f} px. Unless it comes from a calibration, map again "
+        "with the focal refined (glam map --refine-focal, or pass it as --focal / the job option "
+        "`focal` instead of intrinsics)",
+        r.focal_original, 100.0 * (*r.free_focal_original / r.focal_original - 1.0), *r.free_focal_original));
+  }
   return warnings;
 }
 
@@ -91,6 +101,7 @@ nlohmann::json MappingReport::ToJson() const {
           {"sift_max_features", sift_max_features},
           {"focal_px", focal},
           {"focal_original_px", focal_original},
+          {"free_focal_original_px", free_focal_original ? nlohmann::json(*free_focal_original) : nlohmann::json()},
           {"fps", fps},
           {"processing_fps", processing_fps},
           {"processing_size", {processing_width, processing_height}},

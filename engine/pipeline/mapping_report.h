@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -51,6 +52,9 @@ struct MappingReport {
   int sift_max_features = 0;  // SIFT features per frame asked for (SiftOptions::max_features)
   double focal = 0;          // estimate, processing pixels
   double focal_original = 0; // estimate, original-resolution pixels
+  // With a fixed (calibrated) focal: where the first submap's bundle adjustment takes it when
+  // it is free, original-resolution pixels (SubmapOptions::check_fixed_focal); else unset.
+  std::optional<double> free_focal_original;
   double fps = 0;            // input frame rate
   double processing_fps = 0; // frames decoded / total time
   int processing_width = 0;
@@ -64,6 +68,11 @@ struct MappingReport {
 
   nlohmann::json ToJson() const;
 };
+
+// A fixed focal that the free-focal check moves by more than this fraction is reported as
+// probably wrong: on the benchmark videos the true focal moves by at most 2.3 %, a wrong one
+// comes back to within 3.4 % of the truth (SubmapOptions::check_fixed_focal).
+inline constexpr double kFixedFocalWarningFraction = 0.05;
 
 // The user-facing explanation of what could not be mapped (MappingReport::warnings).
 std::vector<std::string> Diagnose(const MappingReport& report, int min_features);

@@ -38,6 +38,9 @@ struct SubmapBuilderStats {
   std::int64_t tracking_losses = 0;
   std::int64_t submap_rebuilds = 0;  // open submaps tracked again after a focal change
   double bundle_adjust_seconds = 0;
+  // Where the first completed submap's bundle adjustment takes a fixed focal when it is let
+  // free (processing pixels; SubmapOptions::check_fixed_focal). Unset while refining anyway.
+  std::optional<double> free_focal_px;
 };
 
 class SubmapBuilder {
@@ -138,6 +141,8 @@ class SubmapBuilder {
   // frame positions it refined.
   std::vector<bool> RefineWithTrackedFrames();
   void HandOffOverlap(std::vector<Submap>* completed);
+  // SubmapOptions::check_fixed_focal, on the open submap (once per builder).
+  void CheckFixedFocal();
 
   Camera CurrentCamera() const;
   const Landmark* FindLandmark(std::uint32_t id) const;

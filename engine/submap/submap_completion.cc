@@ -120,6 +120,21 @@ void SubmapBuilder::RelocaliseFrames(const std::vector<bool>& keep) {
   }
 }
 
+void SubmapBuilder::CheckFixedFocal() {
+  if (!options_.check_fixed_focal || options_.bundle_adjustment.refine_focal || stats_.free_focal_px) return;
+  std::vector<Keyframe> keyframes = open_.keyframes;
+  std::vector<Landmark> landmarks = open_.landmarks;
+  BundleAdjustmentOptions ba = options_.bundle_adjustment;
+  ba.refine_focal = true;
+  ba.share_focal = true;
+  ba.focal_prior_weight = 0.0;
+  const auto summary = BundleAdjust(CurrentCamera().intrinsics(), keyframes, landmarks, ba, cancel_);
+  stats_.bundle_adjust_seconds += summary.seconds;
+  stats_.free_focal_px = keyframes.front().focal;
+  GLAM_LOG_INFO("fixed focal check: {:.1f} px given, {:.1f} px preferred with the focal free ({:+.1f} %, {:.2f} s)",
+                focal_, *stats_.free_focal_px, 100.0 * (*stats_.free_focal_px / focal_ - 1.0), summary.seconds);
+}
+
 Submap SubmapBuilder::Complete() {
   const Camera camera = CurrentCamera();
   const std::size_t before = open_.landmarks.size();
@@ -132,6 +147,7 @@ Submap SubmapBuilder::Complete() {
     RemoveReprojectionOutliers(camera.intrinsics(), open_.keyframes, open_.landmarks, options_.outlier_filter);
   }
   RelocaliseFrames(refined);
+  CheckFixedFocal();
 
   Submap submap;
   submap.id = next_submap_id_++;

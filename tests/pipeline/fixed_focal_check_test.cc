@@ -1,0 +1,76 @@
+// The fixed-focal check (SubmapOptions::check_fixed_focal): with calibrated intrinsics the focal
+// is held fixed, and a focal that is really a guess (EXIF, data sheet) would be held wrong for
+// the whole run. The first submap is bundle adjusted once with the focal free; the report gives
+// where it went and warns when that is far from the given focal. Ground truth: the synthetic
+// clip's own focal (lawnmower_small, 554.3 px).
+#include <cmath>
+#include <filesystem>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "engine/core/intrinsics_io.h"
+#include "engine/pipeline/mapping_job.h"
+#include "engine/pipeline/mapping_report.h"
+
+namespace glam {
+namespace {
+
+namespace fs = std::filesystem;
+
+const fs::path kClip = fs::path(GLAM_TEST_FIXTURES_DIR) / "lawnmower_small";
+
+bool HasFocalWarning(const MappingReport& report) {
+  for (const std::string& w : report.warnings) {
+    if (w.find("fixed focal length") != std::string::npos) return true;
+  }
+  return false;
+}
+
+MappingReport MapWithFocalFactor(double factor, const std::string& name) {
+  MappingOptions options;
+  Intrinsics in = ReadIntrinsicsJson(kClip / "intrinsics.json");
+  in.fx *= factor;
+  in.fy *= factor;
+  options.intrinsics = in;
+  options.submap.bundle_adjustment.refine_focal = false;  // what --intrinsics means
+  const fs::path out = fs::temp_directory_path() / ("glam_fixed_focal_check_" + name);
+  fs::remove_all(out);
+  return RunMapping(kClip / "video.mp4", out, options);
+}
+
+TEST(FixedFocalCheck, AWrongFixedFocalIsFoundAndReportedTheRightOneIsNot) {
+  const double truth = ReadIntrinsicsJson(kClip / "intrinsics.json").fx;
+
+  const MappingReport right = MapWithFocalFactor(1.0, "right");
+  ASSERT_TRUE(right.free_focal_original.has_value());
+  EXPECT_NEAR(right.focal_original, truth, 1e-6);  // held fixed
+  EXPECT_LT(std::abs(*right.free_focal_original / truth - 1.0), kFixedFocalWarningFraction)
+      << *right.free_focal_original;
+  EXPECT_FALSE(HasFocalWarning(right));
+
+  // 12 % long: the free adjustment comes back close to the truth, and the user is told.
+  const MappingReport wrong = MapWithFocalFactor(1.12, "long");
+  ASSERT_TRUE(wrong.free_focal_original.has_value());
+  EXPECT_NEAR(wrong.focal_original, 1.12 * truth, 1e-6);  // still held fixed: only a warning
+  EXPECT_LT(std::abs(*wrong.free_focal_original / truth - 1.0), 0.04) << *wrong.free_focal_original;
+  EXPECT_TRUE(HasFocalWarning(wrong));
+  EXPECT_TRUE(wrong.ToJson().at("free_focal_original_px").is_number());
+}
+
+TEST(FixedFocalCheck, DiagnoseWarnsOnlyBeyondTheThresholdAndOnlyWhenChecked) {
+  MappingReport r;
+  r.frames_decoded = 100;
+  r.submaps = 1;
+  r.focal_original = 1000;
+  EXPECT_TRUE(Diagnose(r, 20).empty());  // refined runs have no check
+  r.free_focal_original = 1000 * (1 + 0.9 * kFixedFocalWarningFraction);
+  EXPECT_TRUE(Diagnose(r, 20).empty());
+  r.free_focal_original = 1000 * (1 - 1.1 * kFixedFocalWarningFraction);
+  ASSERT_EQ(Diagnose(r, 20).size(), 1u);
+  EXPECT_NE(Diagnose(r, 20)[0].find("-6 % off"), std::string::npos) << Diagnose(r, 20)[0];
+  EXPECT_TRUE(r.ToJson().at("free_focal_original_px").is_number());
+}
+
+}  // namespace
+}  // namespace glam
