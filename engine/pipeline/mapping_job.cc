@@ -320,10 +320,10 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   report.graph_landmarks = static_cast<std::int64_t>(aligner.graph_landmarks());
   report.alignment = aligner.timings();
   report.focal = builder.focal();
-  report.focal_original = info.scale > 0 ? builder.focal() / info.scale : builder.focal();
-  if (stats.free_focal_px) {
-    report.free_focal_original = info.scale > 0 ? *stats.free_focal_px / info.scale : *stats.free_focal_px;
-  }
+  // Focal lengths in processing pixels -> original-resolution pixels (ResolveIntrinsics' inverse).
+  const auto to_original = [&info](double px) { return info.scale > 0 ? px / info.scale : px; };
+  report.focal_original = to_original(builder.focal());
+  if (stats.free_focal_px) report.free_focal_original = to_original(*stats.free_focal_px);
   report.input_ended_early = source->ended_early();
   report.timings.decode_and_features_s = worker.busy_seconds();
   report.timings.builder_s = builder_seconds;

@@ -65,14 +65,15 @@ std::vector<std::string> Diagnose(const MappingReport& r, int min_features) {
     warnings.push_back(fmt::format("{} of {} frames could not be posed (see trajectory.tum)",
                                    r.frames_unposed, r.frames_decoded));
   }
-  if (r.free_focal_original && r.focal_original > 0 &&
-      std::abs(*r.free_focal_original / r.focal_original - 1.0) > kFixedFocalWarningFraction) {
+  const double focal_change =
+      r.free_focal_original && r.focal_original > 0 ? *r.free_focal_original / r.focal_original - 1.0 : 0.0;
+  if (std::abs(focal_change) > kFixedFocalWarningFraction) {
     warnings.push_back(fmt::format(
         "the fixed focal length ({:.1f} px) looks {:+.0f} % off: let free, the first submap's "
         "bundle adjustment moves it to {:.1f} px. Unless it comes from a calibration, map again "
         "with the focal refined (glam map --refine-focal, or pass it as --focal / the job option "
         "`focal` instead of intrinsics)",
-        r.focal_original, 100.0 * (*r.free_focal_original / r.focal_original - 1.0), *r.free_focal_original));
+        r.focal_original, 100.0 * focal_change, *r.free_focal_original));
   }
   return warnings;
 }
