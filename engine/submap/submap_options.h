@@ -81,13 +81,15 @@ struct SubmapOptions {
   // At most this many rebuilds per submap (the estimate usually settles after one).
   int max_submap_rebuilds = 2;
   // With the focal held fixed (bundle_adjustment.refine_focal off: calibrated intrinsics), the
-  // first completed submap is bundle adjusted once more on a copy with the focal free and no
-  // prior; SubmapBuilderStats::free_focal_px reports where it went, and the job warns when that
-  // is far from the given focal. Why: a focal from EXIF or a data sheet passed as a calibration
-  // is held wrong for the whole run (Brighton Beach photos: EXIF 739.6 px, this check 845.6 px,
-  // COLMAP 884 px; fixed 0.59 m error, refined 0.46 m). Measured on the lawnmower / oblique
-  // benchmark videos: the true focal moves -2.3 % / +0.5 %, a focal 10 % short or 15 % long
-  // comes back to within 1.5 % / 3.4 % of the truth. Costs one bundle adjustment, once.
+  // first completed submap is bundle adjusted on a copy, to convergence with the focal fixed and
+  // then once more with it free and no prior; SubmapBuilderStats::free_focal_px reports where it
+  // went, and the job warns when that is far from the given focal. Why: a focal from EXIF or a
+  // data sheet passed as a calibration is held wrong for the whole run (Brighton Beach photos:
+  // EXIF 739.6 px, this check 845.6 px, COLMAP 884 px; fixed 0.59 m error, refined 0.46 m).
+  // Measured: the true focal moves 0.0 / 0.0 / +0.5 % on the lawnmower / loop / oblique
+  // benchmark videos and -1.1 to +0.1 % on the six focal_range clips; a focal 10 % short or
+  // 15 % long comes back to within 3.3 % of the truth. Costs two bundle adjustments, once
+  // (0.1-0.5 s at 640x360).
   bool check_fixed_focal = true;
   // The focal prior's weight (bundle_adjustment.focal_prior_weight) is multiplied by
   // 1 + focal_prior_growth * (keyframes of completed submaps): what earlier submaps agreed on
