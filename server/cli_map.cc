@@ -151,8 +151,8 @@ void RegisterMapCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--stride", args->options.source.stride, "Use every N-th frame")->capture_default_str();
   cmd->add_option("--keyframes-per-submap", args->options.submap.keyframes_per_submap,
-                  "Keyframes at which a submap is completed (a loop is closed only when it spans at "
-                  "least three submaps: try 12 for footage that is one short orbit)")
+                  "Keyframes at which a submap is completed (try 12 for footage that is one short "
+                  "orbit: smaller submaps bend less; docs/benchmarks.md)")
       ->capture_default_str();
   cmd->add_option("--keyframe-parallax", args->options.submap.max_keyframe_parallax_deg,
                   "A tracked frame at this median parallax (deg) to the last keyframe becomes a "
