@@ -13,6 +13,7 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/support/fake_mapping.h"
 #include "tests/support/temp_dir.h"
 
 #include "api/api_error.h"
@@ -26,11 +27,10 @@ using namespace std::chrono_literals;
 
 fs::path FreshDir(const std::string& name) { return glam::testing::FreshTempDir("api_service_" + name); }
 
-struct FakeEngine {
-  std::atomic<bool> hold{false};  // stop at step 5 until released or cancelled
+// The fake run (10 steps of 10 frames, held at step 5), plus what the service passed to it.
+struct FakeEngine : glam::testing::FakeMapping {
   std::atomic<int> runs{0};
   std::atomic<bool> last_resume{false};
-  std::atomic<bool> at_hold{false};
 
   MappingReport Run(const Job& job, const fs::path& dir, const MappingOptions& options,
                     const ProgressCallback& progress, const CancellationToken& cancel) {
@@ -38,23 +38,7 @@ struct FakeEngine {
     last_resume = options.resume;
     if (job.name == "fail-input") throw InputError("the video has no texture");
     if (job.name == "fail-env") throw EnvironmentError("disk on fire");
-    for (int i = 1; i <= 10; ++i) {
-      cancel.ThrowIfCancelled();
-      MappingProgress p;
-      p.stage = "mapping";
-      p.frames_done = i * 10;
-      p.frames_total = 100;
-      p.submaps_completed = i / 3;
-      p.revision = i / 3;
-      progress(p);
-      while (hold && i == 5) {
-        at_hold = true;
-        cancel.ThrowIfCancelled();
-        std::this_thread::sleep_for(2ms);
-      }
-      std::this_thread::sleep_for(2ms);
-    }
-    std::ofstream(dir / "trajectory.tum") << "0 0 0 0 0 0 0 1\n";
+    FakeMapping::Run(dir, progress, cancel);
     MappingReport report;
     report.warnings = {"fake warning"};
     return report;

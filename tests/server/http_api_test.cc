@@ -20,6 +20,7 @@
 #include "engine/pipeline/tile_writer.h"
 #include "server/http_server.h"
 #include "tests/server/server_test_util.h"
+#include "tests/support/fake_mapping.h"
 
 namespace glam::server {
 namespace {
@@ -32,43 +33,25 @@ using nlohmann::json;
 
 constexpr const char* kTrajectory = "0.0 1 2 3 0 0 0 1\n0.1 1.5 2 3 0 0 0 1\n";
 
-struct FakeEngine {
-  std::atomic<bool> hold{false};
-  std::atomic<bool> at_hold{false};
-
-  MappingReport Run(const fs::path& dir, const ProgressCallback& progress, const CancellationToken& cancel) {
-    for (int i = 1; i <= 6; ++i) {
-      cancel.ThrowIfCancelled();
-      MappingProgress p;
-      p.stage = "mapping";
-      p.frames_done = i * 5;
-      p.frames_total = 30;
-      p.submaps_completed = i / 2;
-      p.revision = i / 2;
-      progress(p);
-      while (hold && i == 3) {
-        at_hold = true;
-        cancel.ThrowIfCancelled();
-        std::this_thread::sleep_for(2ms);
-      }
-      std::this_thread::sleep_for(5ms);
-    }
-    std::ofstream(dir / "trajectory.tum") << kTrajectory;
-    return MappingReport{};
-  }
-};
-
 class HttpApiTest : public ::testing::Test {
  protected:
   void Start(HttpServerOptions options = {}, const std::string& name = "api") {
     dir_ = glam::testing::FreshTempDir(name);
     video_ = glam::testing::MakeTinyVideo(dir_);
+    // A short clip: 6 steps of 5 frames, a submap every 2 steps, held at step 3.
+    engine_.steps = 6;
+    engine_.frames_per_step = 5;
+    engine_.steps_per_submap = 2;
+    engine_.hold_step = 3;
+    engine_.step_pause = 5ms;
+    engine_.trajectory = kTrajectory;
     api::JobServiceOptions service_options;
     service_options.data_dir = dir_ / "data";
     service_options.progress_interval = 0ms;
     service_options.executor = [this](const api::Job&, const fs::path& d, const MappingOptions&,
                                       const ProgressCallback& p, const CancellationToken& c) {
-      return engine_.Run(d, p, c);
+      engine_.Run(d, p, c);
+      return MappingReport{};
     };
     service_ = std::make_unique<api::JobService>(service_options);
     options.port = 0;
@@ -124,7 +107,7 @@ class HttpApiTest : public ::testing::Test {
 
   fs::path dir_;
   fs::path video_;
-  FakeEngine engine_;
+  glam::testing::FakeMapping engine_;
   std::string token_;
   std::unique_ptr<api::JobService> service_;
   std::unique_ptr<HttpServer> http_;
