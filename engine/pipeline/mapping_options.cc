@@ -43,6 +43,7 @@ void UsePaperMethod(MappingOptions* options) {
   submap.rebuild_focal_change = 0;
   submap.completion_ba_max_frames = 0;
   submap.extend_short_final_submap = false;
+  submap.isolated_filter_once = false;
   options->alignment.use_shared_frames = false;
   options->alignment.local_window = 0;
 }

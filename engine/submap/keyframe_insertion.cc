@@ -222,7 +222,11 @@ void SubmapBuilder::OptimiseAndFilter() {
   const auto summary = BundleAdjust(camera.intrinsics(), open_.keyframes, open_.landmarks, ba, cancel_);
   stats_.bundle_adjust_seconds += summary.seconds;
   RemoveReprojectionOutliers(camera.intrinsics(), open_.keyframes, open_.landmarks, options_.outlier_filter);
-  RemoveIsolatedLandmarks(open_.landmarks, options_.outlier_filter);
+  // Each landmark meets filter 2 once, at the first adjustment after it was triangulated
+  // (SubmapOptions::isolated_filter_once); the statistic still covers all landmarks.
+  RemoveIsolatedLandmarks(open_.landmarks, options_.outlier_filter,
+                          options_.isolated_filter_once ? open_.first_unfiltered_landmark_id : 0);
+  open_.first_unfiltered_landmark_id = open_.next_landmark_id;
   // Keyframe frames take their refined poses (tracking continues from them).
   for (std::size_t k = 0; k < open_.keyframes.size(); ++k) {
     open_.frames[open_.keyframe_frame_positions[k]].cam_from_submap = open_.keyframes[k].cam_from_submap;

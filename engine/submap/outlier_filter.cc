@@ -92,7 +92,8 @@ std::vector<double> MeanNeighbourDistances(const std::vector<Eigen::Vector3d>& p
   return mean;
 }
 
-std::size_t RemoveIsolatedLandmarks(std::vector<Landmark>& landmarks, const OutlierFilterOptions& options) {
+std::size_t RemoveIsolatedLandmarks(std::vector<Landmark>& landmarks, const OutlierFilterOptions& options,
+                                    std::uint32_t first_tested_id) {
   if (static_cast<int>(landmarks.size()) <= options.neighbours) return 0;
   std::vector<Eigen::Vector3d> points;
   points.reserve(landmarks.size());
@@ -109,7 +110,7 @@ std::size_t RemoveIsolatedLandmarks(std::vector<Landmark>& landmarks, const Outl
 
   std::size_t i = 0;
   const std::size_t before = landmarks.size();
-  std::erase_if(landmarks, [&](const Landmark&) { return mean[i++] > limit; });
+  std::erase_if(landmarks, [&](const Landmark& lm) { return mean[i++] > limit && lm.id >= first_tested_id; });
   return before - landmarks.size();
 }
 

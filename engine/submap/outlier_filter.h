@@ -3,7 +3,9 @@
 //      and landmarks left with fewer than two observations go with them;
 //   2. after every BA: points far from the rest of the scene (near-parallel rays give small
 //      reprojection error but wild depth) — mean distance to the k = 30 nearest neighbours
-//      (kd-tree) more than 2 standard deviations above the mean of that statistic;
+//      (kd-tree) more than 2 standard deviations above the mean of that statistic (the submap
+//      builder lets it remove only points it has not tested before: SubmapOptions::
+//      isolated_filter_once);
 //   3. at completion: both filters again, and points that are only weakly triangulated: the
 //      largest angle between two of their keyframe rays is below min_completion_angle_deg.
 //      Their depth error grows as 1 / angle (at 2 degrees and 0.3 px noise on a 550 px focal
@@ -40,8 +42,10 @@ std::size_t RemoveReprojectionOutliers(const Intrinsics& intrinsics,
                                        const OutlierFilterOptions& options);
 
 // Filter 2. Returns the number of landmarks removed. With fewer than k + 1 points nothing is
-// removed (the statistic is meaningless there).
-std::size_t RemoveIsolatedLandmarks(std::vector<Landmark>& landmarks, const OutlierFilterOptions& options);
+// removed (the statistic is meaningless there). The statistic is taken over all landmarks, but
+// only those with id >= first_tested_id can be removed (see SubmapBuilder::OptimiseAndFilter).
+std::size_t RemoveIsolatedLandmarks(std::vector<Landmark>& landmarks, const OutlierFilterOptions& options,
+                                    std::uint32_t first_tested_id = 0);
 
 // Filter 3 (completion). Removes landmarks whose largest pairwise angle between the rays from
 // their observing keyframes' centres is below options.min_completion_angle_deg; returns the

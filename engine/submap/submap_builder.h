@@ -81,6 +81,8 @@ class SubmapBuilder {
     std::vector<Landmark> landmarks;
     std::unordered_map<std::uint32_t, LandmarkExtra> extras;
     std::uint32_t next_landmark_id = 0;
+    // Landmarks with smaller ids have passed the isolated-point filter once (OptimiseAndFilter).
+    std::uint32_t first_unfiltered_landmark_id = 0;
     int tau_resection = 0;
     int tau_stereo = 0;
     bool bootstrapped = false;

@@ -156,7 +156,7 @@ Submap SubmapBuilder::Complete() {
   const Camera camera = CurrentCamera();
   const std::size_t before = open_.landmarks.size();
   RemoveReprojectionOutliers(camera.intrinsics(), open_.keyframes, open_.landmarks, options_.outlier_filter);
-  RemoveIsolatedLandmarks(open_.landmarks, options_.outlier_filter);
+  RemoveIsolatedLandmarks(open_.landmarks, options_.outlier_filter);  // all of them, as in the paper
   RemoveWeaklyTriangulatedLandmarks(open_.keyframes, open_.landmarks, options_.outlier_filter);
   const std::vector<bool> refined = RefineWithTrackedFrames();
   if (std::find(refined.begin(), refined.end(), true) != refined.end()) {

@@ -33,6 +33,35 @@ TEST(OutlierFilter, RemovesFarAwayPointsOnly) {
   for (const auto& lm : filtered) EXPECT_GT(lm.point_in_submap.z(), -10);
 }
 
+TEST(OutlierFilter, OnlyLandmarksFromTheFirstTestedIdOnCanBeRemoved) {
+  // The builder tests each landmark once (SubmapOptions::isolated_filter_once): landmarks below
+  // first_tested_id passed earlier and stay, even where the statistic would remove them now.
+  std::mt19937 rng(2);
+  std::uniform_real_distribution<double> u(-50, 50);
+  std::vector<Landmark> lms(1000);
+  for (std::size_t i = 0; i < lms.size(); ++i) {
+    lms[i].id = static_cast<std::uint32_t>(i);
+    lms[i].point_in_submap = Eigen::Vector3d(u(rng), u(rng), 0.1 * u(rng));
+  }
+  lms[10].point_in_submap = Eigen::Vector3d(0, 0, -900);   // old: kept
+  lms[900].point_in_submap = Eigen::Vector3d(0, 0, -900);  // new: removed
+  std::vector<Landmark> all = lms;
+  const std::size_t removed_all = RemoveIsolatedLandmarks(all, {});
+  const std::size_t removed_new = RemoveIsolatedLandmarks(lms, {}, 500);
+  EXPECT_LT(removed_new, removed_all);
+  EXPECT_GE(removed_new, 1u);
+  bool old_kept = false;
+  for (const Landmark& lm : lms) {
+    EXPECT_NE(lm.id, 900u);
+    old_kept = old_kept || lm.id == 10u;
+  }
+  EXPECT_TRUE(old_kept);
+  // The border points the full pass removes below id 500 all stay.
+  std::size_t below = 0;
+  for (const Landmark& lm : lms) below += lm.id < 500 ? 1 : 0;
+  EXPECT_EQ(below, 500u);
+}
+
 TEST(OutlierFilter, FewPointsAreKept) {
   std::vector<Landmark> lms(10);
   for (int i = 0; i < 10; ++i) lms[i].point_in_submap = Eigen::Vector3d(i * i * i, 0, 0);

@@ -54,6 +54,7 @@ class SubmapBuilderOnSyntheticClip : public ::testing::Test {
     if (S::paper) {
       options.max_keyframe_parallax_deg = 0;
       options.bootstrap_accept_parallax_deg = 0;
+      options.isolated_filter_once = false;
       sift.grid_cols = 0;
     }
     test_support::ClipRun run =
