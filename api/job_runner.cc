@@ -4,12 +4,16 @@
 #include <exception>
 
 #include "engine/core/logging.h"
+#include "engine/core/thread_name.h"
 
 namespace glam::api {
 
 JobRunner::JobRunner(int workers, Work work) : work_(std::move(work)) {
   workers = std::max(1, workers);
-  for (int i = 0; i < workers; ++i) workers_.emplace_back([this] { WorkerLoop(); });
+  for (int i = 0; i < workers; ++i) workers_.emplace_back([this] {
+      NameCurrentThread("glam-job");
+      WorkerLoop();
+    });
 }
 
 JobRunner::~JobRunner() { Shutdown(); }

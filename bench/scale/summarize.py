@@ -12,6 +12,65 @@ import sys
 import numpy as np
 
 
+def stage_labels(tids, mains, names):
+    """Stage of each thread: the engine names its threads (engine/core/thread_name.h) and the
+    main thread runs the builder. A thread inherits its creator's name, so "glam" also covers
+    ffmpeg's decoding threads and Ceres' workers started by the main thread, and "glam-decode"
+    OpenCV's parallel_for_ workers (created on the decoder thread's first OpenCV call)."""
+    labels = {}
+    for tid, main, name in zip(tids, mains, names):
+        labels[tid] = "builder (main thread)" if main else f"{name} threads"
+    return labels
+
+
+def print_stage_cpu(work, t, cpu, n, tenth):
+    """CPU ms per frame by stage in the first and the last tenth. A thread's CPU time counts
+    from its last sample on after it exits; threads that live shorter than the sampling
+    interval (the per-window SIFT helpers) are never sampled and show up as the rest of the
+    process's CPU time."""
+    path = os.path.join(work, "threads.tsv")
+    if cpu is None or not os.path.exists(path):
+        return
+    rows = np.genfromtxt(path, names=True, delimiter="\t", dtype=None, encoding=None)
+    if rows.size == 0:
+        return
+    labels = stage_labels(list(rows["tid"]), list(rows["is_main"]), list(rows["name"]))
+    stages = sorted(set(labels.values()))
+    last = {}
+    by_time = {}
+    for r in rows:
+        by_time.setdefault(round(float(r["t_s"]), 1), []).append(r)
+    series = {k: [] for k in stages + ["short-lived threads (not sampled)"]}
+    proc_t = {round(float(x), 1): c for x, c in zip(t, cpu)}
+    ts, frames = [], []
+    for when in sorted(by_time):
+        for r in by_time[when]:
+            last[int(r["tid"])] = float(r["cpu_s"])
+        if when not in proc_t:
+            continue
+        sums = {k: 0.0 for k in stages}
+        for tid, c in last.items():
+            sums[labels[tid]] += c
+        for k in stages:
+            series[k].append(sums[k])
+        series["short-lived threads (not sampled)"].append(proc_t[when] - sum(sums.values()))
+        ts.append(when)
+        frames.append(max(int(r["frames_done"]) for r in by_time[when]))
+    frames = np.array(frames, float)
+    keep = np.concatenate([[True], np.diff(frames) > 0])
+    if keep.sum() < 4:
+        return
+    f = frames[keep]
+    a0 = f[0]
+    print(f"CPU ms per frame by stage, first tenth (frames {a0:.0f}-{tenth:.0f}) -> last tenth "
+          f"({n - tenth:.0f}-{n}):")
+    for k, v in series.items():
+        v = np.array(v)[keep]
+        first = (np.interp(tenth, f, v) - np.interp(a0, f, v)) / (tenth - a0) * 1000
+        last_t = (np.interp(n, f, v) - np.interp(n - tenth, f, v)) / tenth * 1000
+        print(f"  {k}: {first:.1f} -> {last_t:.1f} ms ({100 * (last_t / first - 1) if first > 0 else 0:+.0f} %)")
+
+
 def main():
     work, png = sys.argv[1], sys.argv[2]
     target = int(sys.argv[3]) if len(sys.argv) > 3 else 100000
@@ -47,6 +106,7 @@ def main():
         clast = tenth / (cpu_at(n) - cpu_at(n - tenth))
         print(f"frames per CPU second (load-independent): first tenth {cfirst:.2f}, last tenth "
               f"{clast:.2f}; decay {100 * (1 - clast / cfirst):.1f} %; {cpu.max():.0f} CPU s in all")
+        print_stage_cpu(work, s["t_s"], s["cpu_s"], n, tenth)
     if os.path.exists(os.path.join(work, "map_time.txt")):
         wall = float(open(os.path.join(work, "map_time.txt")).read().split()[1])
         print(f"wall time {wall:.0f} s = {n / wall:.2f} fps overall")

@@ -3,6 +3,7 @@
 #include <chrono>
 
 #include "engine/core/error.h"
+#include "engine/core/thread_name.h"
 
 namespace glam {
 
@@ -14,6 +15,7 @@ AlignmentThread::~AlignmentThread() {
 }
 
 void AlignmentThread::Run() {
+  NameCurrentThread("glam-align");
   try {
     while (std::optional<std::shared_ptr<const Submap>> submap = queue_.Pop()) {
       if (aborting_.load()) break;

@@ -5,6 +5,7 @@
 #include <thread>
 
 #include "engine/core/options.h"
+#include "engine/core/thread_name.h"
 #include "engine/features/gray_image.h"
 
 namespace glam {
@@ -91,6 +92,7 @@ std::vector<FrameFeatures> DecoderWorker::ExtractBatch(const std::vector<Frame>&
   std::vector<FrameFeatures> items(batch.size());
   std::vector<std::exception_ptr> errors(batch.size());
   auto extract = [&](std::size_t i) {
+    if (i > 0) NameCurrentThread("glam-sift");
     try {
       items[i] = Detect(batch[i], i);
     } catch (...) {
@@ -137,6 +139,7 @@ void DecoderWorker::RunWithPropagation() {
     std::exception_ptr detection_error;
     std::thread helper;
     auto detect_last_frame = [&] {
+      NameCurrentThread("glam-sift");
       try {
         detection = Detect(frames.back(), extractors_.size() > 1 ? 1 : 0);
       } catch (...) {

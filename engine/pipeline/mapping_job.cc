@@ -17,6 +17,7 @@
 #include "engine/core/bounded_queue.h"
 #include "engine/core/error.h"
 #include "engine/core/logging.h"
+#include "engine/core/thread_name.h"
 #include "engine/pipeline/decoder_worker.h"
 #include "engine/map/submap_io.h"
 #include "engine/alignment/vocabulary_tree.h"
@@ -190,7 +191,10 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   feature_stage.min_features = static_cast<std::size_t>(min_features);
   report.detection_interval = feature_stage.detection_interval;
   DecoderWorker worker(*source, feature_stage, queue, cancel, stop);
-  std::thread decoder([&worker] { worker.Run(); });
+  std::thread decoder([&worker] {
+    NameCurrentThread("glam-decode");
+    worker.Run();
+  });
 
   MappingProgress state;
   state.stage = "mapping";
