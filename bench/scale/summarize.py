@@ -93,6 +93,12 @@ def main():
         return float(np.interp(frames, dd, tt))
 
     n = int(done.max())
+    # The tenths end at the last sample taken while frames were still streaming: the frame count
+    # reaches the total only after the end of input, when the final submap's completion and the
+    # export have run, which are no part of the flight's steady state.
+    streaming = dd[dd < total]
+    if finished and len(streaming) >= 2 and streaming.max() >= 0.9 * total:
+        n = int(streaming.max())
     tenth = n / 10
     fps_first = tenth / (time_at(tenth) - time_at(0 if dd[0] == 0 else dd[0]))
     fps_last = tenth / (time_at(n) - time_at(n - tenth))
@@ -109,7 +115,7 @@ def main():
         print_stage_cpu(work, s["t_s"], s["cpu_s"], n, tenth)
     if os.path.exists(os.path.join(work, "map_time.txt")):
         wall = float(open(os.path.join(work, "map_time.txt")).read().split()[1])
-        print(f"wall time {wall:.0f} s = {n / wall:.2f} fps overall")
+        print(f"wall time {wall:.0f} s = {int(done.max()) / wall:.2f} fps overall")
 
     # Trends: RSS grows while a submap is open (its frames' features are kept until the
     # submap completes; bounded by max_frames_per_submap) and drops back when it completes, so
