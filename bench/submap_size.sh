@@ -1,18 +1,19 @@
 #!/usr/bin/env bash
 # Submap size against loop length (docs/benchmarks.md, "Submap size and short loops").
 #
-# A loop can only be closed by the submap graph when it spans at least three submaps: the
-# submaps are rigid, so two submaps joined at both ends (the temporal overlap and the revisit)
-# can meet only one of the two. This renders the oblique benchmark flight (one 600-frame loop
-# at 60 m, 30 degrees from nadir, as in bench/colmap/run.sh) with several seeds and maps each
-# one, calibrated, at several submap sizes (keyframes per submap). Prints one row per run:
+# Smaller submaps bend less: on a flight that is one short loop, each submap's own drift (a few
+# tenths of a degree) is what sets the trajectory error, and the drifts of two long submaps
+# nearly cancel around the loop, so no loop edge can correct them (docs/benchmarks.md).
+# This renders the oblique benchmark flight (one 600-frame loop at 60 m, 30 degrees from nadir,
+# as in bench/colmap/run.sh) with several seeds and maps each one, calibrated, at several
+# submap sizes (keyframes per submap). Prints one row per run:
 # submaps, graph edges (retrieved = loop closures), posed frames, ATE after Sim3 and the map's
 # median point error (`glam eval`).
 #
 # Usage: bench/submap_size.sh [BUILD_DIR]   (default build; outputs in out/bench/submap_size)
 #   SEEDS="21 22 23 24 25" SIZES="20 16 12" (the defaults) choose the clips and submap sizes;
 #   MAP_ARGS are passed to every `glam map`.
-# Takes ~7 minutes on 2 cores with the defaults (15 runs of 600 frames at 640x360 + renders).
+# Takes ~9 minutes on 2 cores with the defaults (15 runs of 600 frames at 640x360 + renders).
 set -euo pipefail
 BUILD_DIR="${1:-build}"
 GLAM="$BUILD_DIR/server/glam"
