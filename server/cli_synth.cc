@@ -17,6 +17,14 @@ void RegisterSynthCommand(CLI::App& app) {
   cmd->add_option("--pitch-deg", options->pitch_deg, "Camera tilt from nadir (deg), 0..80")->capture_default_str();
   cmd->add_option("--speed", options->speed, "Ground speed (m/s)")->capture_default_str();
   cmd->add_option("--wobble-deg", options->wobble_deg, "Attitude wobble amplitude (deg)")->capture_default_str();
+  cmd->add_option("--stop-every", options->stop_every,
+                  "Stop-and-yaw: hover every this many metres of path, yaw, fly on; 0 = never")
+      ->capture_default_str();
+  cmd->add_option("--stop-seconds", options->stop_seconds,
+                  "Duration of each stop (s): slowing down, the yaw, speeding up")
+      ->capture_default_str();
+  cmd->add_option("--stop-yaw-deg", options->stop_yaw_deg, "Yaw turned in place at each stop (deg)")
+      ->capture_default_str();
   cmd->add_option("--fps", options->fps, "Frame rate")->capture_default_str();
   cmd->add_option("--frames", options->frames, "Number of frames")->capture_default_str();
   cmd->add_option("--width", options->width, "Image width (px, even)")->capture_default_str();

@@ -44,6 +44,7 @@ void UsePaperMethod(MappingOptions* options) {
   submap.completion_ba_max_frames = 0;
   submap.extend_short_final_submap = false;
   submap.isolated_filter_once = false;
+  submap.bootstrap_rotation_veto_fraction = 0;
   options->alignment.use_shared_frames = false;
   options->alignment.local_window = 0;
 }

@@ -13,6 +13,7 @@
 #include "engine/core/median.h"
 #include "engine/features/feature_matcher.h"
 #include "engine/geometry/essential.h"
+#include "engine/geometry/rotation_only.h"
 #include "engine/geometry/triangulation.h"
 #include "engine/submap/submap_builder.h"
 
@@ -27,6 +28,7 @@ struct TwoViewCandidate {
   std::size_t position = 0;  // of the second frame in the open submap's frames
   SE3 cam1_from_cam0;
   std::vector<Match> inlier_matches;
+  std::vector<TwoViewCorrespondence> inlier_rays;  // one per inlier match
   std::vector<Eigen::Vector3d> points;  // in cam0 (= submap) frame, one per inlier match
   std::vector<double> angles_deg;
   double median_angle_deg = 0;
@@ -73,6 +75,7 @@ bool SubmapBuilder::TryBootstrap() {
         const Eigen::Vector3d p = *triangulated;
         if (p.z() <= 0 || (rel.cam2_from_cam1 * p).z() <= 0) continue;
         candidate.inlier_matches.push_back(matches[i]);
+        candidate.inlier_rays.push_back(rays[i]);
         candidate.points.push_back(p);
         candidate.angles_deg.push_back(
             TriangulationAngle(Eigen::Vector3d::Zero(), rel.cam2_from_cam1.Inverse().translation(), p) * kRadToDeg);
@@ -92,7 +95,21 @@ bool SubmapBuilder::TryBootstrap() {
     open_.tau_stereo = options_.EffectiveTauStereo(features);
     open_.tau_resection = options_.EffectiveTauResection(features);
   }
-  const bool enough_parallax = usable && candidate.median_angle_deg >= options_.min_bootstrap_parallax_deg;
+  bool enough_parallax = usable && candidate.median_angle_deg >= options_.min_bootstrap_parallax_deg;
+  if (enough_parallax && options_.bootstrap_rotation_veto_fraction > 0) {
+    // Only where the angle would count: is it a rotation that E mistook for a baseline?
+    RotationOnlyOptions rotation_options;
+    rotation_options.inlier_threshold_px = options_.bootstrap_rotation_veto_pixels;
+    const RotationOnlyFit rotation =
+        FitRotationOnly(candidate.inlier_rays, camera.intrinsics().fx, rotation_options);
+    if (rotation.success && rotation.inlier_fraction >= options_.bootstrap_rotation_veto_fraction) {
+      GLAM_LOG_DEBUG("bootstrap frame {} vs {}: a rotation explains {:.1f} % of the {} inliers "
+                     "(median angle {:.2f} deg from E ignored)",
+                     current.index, first.index, 100 * rotation.inlier_fraction, candidate.inlier_rays.size(),
+                     candidate.median_angle_deg);
+      enough_parallax = false;
+    }
+  }
   const bool paper_rule = enough_parallax &&
                           (static_cast<int>(candidate.points.size()) < open_.tau_stereo ||
                            candidate.mean_angle_deg > options_.alpha_stereo_deg);

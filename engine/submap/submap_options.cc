@@ -25,6 +25,8 @@ void SubmapOptions::Check() const {
   CheckInRange("SubmapOptions.min_bootstrap_parallax_deg", min_bootstrap_parallax_deg, 0.1, 30.0);
   CheckGreater("SubmapOptions.max_bootstrap_frames", max_bootstrap_frames, 1);
   CheckInRange("SubmapOptions.bootstrap_accept_parallax_deg", bootstrap_accept_parallax_deg, 0.0, 90.0);
+  CheckInRange("SubmapOptions.bootstrap_rotation_veto_fraction", bootstrap_rotation_veto_fraction, 0.0, 1.0);
+  CheckInRange("SubmapOptions.bootstrap_rotation_veto_pixels", bootstrap_rotation_veto_pixels, 0.1, 10.0);
   CheckGreaterEqual("SubmapOptions.min_tracking_inliers", min_tracking_inliers, 6);
   CheckInRange("SubmapOptions.max_view_angle_deg", max_view_angle_deg, 1.0, 180.0);
   CheckInRange("SubmapOptions.match_radius_fraction", match_radius_fraction, 0.001, 1.0);

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <numbers>
 #include <numeric>
 #include <vector>
 
@@ -223,6 +224,52 @@ TEST(SynthTrajectory, LoopReturnsOverItsStart) {
   EXPECT_LT(closest_late, 5.0);
 }
 
+// Stop-and-yaw: every stop_every metres the drone slows to a hover, yaws in place and flies on
+// with the new heading; speed and yaw change smoothly, and the hover is exactly still.
+TEST(SynthTrajectory, StopAndYawHoversStillTurnsInPlaceAndFliesOn) {
+  SynthOptions o;
+  EXPECT_DOUBLE_EQ(ProgressAt(o, 3.0).metres, 30.0);  // no stops: speed x time
+  EXPECT_DOUBLE_EQ(ProgressAt(o, 3.0).extra_yaw, 0.0);
+  o.stop_every = 50;  // 5 s of cruise, then a 6 s stop: 1.5 s ramps around a 3 s yaw in place
+  o.stop_yaw_deg = 90;
+  const double ramp = o.StopRampSeconds();
+  ASSERT_DOUBLE_EQ(ramp, 1.5);
+  EXPECT_NEAR(ProgressAt(o, 5.0).metres, 50.0, 1e-9);
+  const FlightProgress hover_start = ProgressAt(o, 5.0 + ramp);
+  const FlightProgress hover_end = ProgressAt(o, 11.0 - ramp - 1e-9);
+  EXPECT_NEAR(hover_start.metres, 50.0 + 0.5 * o.speed * ramp, 1e-9);  // half a ramp at speed
+  EXPECT_DOUBLE_EQ(hover_end.metres, hover_start.metres);               // still while yawing
+  EXPECT_NEAR(hover_start.extra_yaw, 0.0, 1e-9);
+  EXPECT_NEAR(hover_end.extra_yaw, std::numbers::pi / 2, 1e-6);
+  // After the stop: cruising again at full speed, the yaw kept, one stop's distance behind.
+  const FlightProgress after = ProgressAt(o, 12.0);
+  EXPECT_NEAR(after.metres, 50.0 + o.speed * ramp + o.speed * 1.0, 1e-9);
+  EXPECT_NEAR(after.extra_yaw, std::numbers::pi / 2, 1e-9);
+  EXPECT_NEAR(ProgressAt(o, 26.0).extra_yaw, 2 * std::numbers::pi / 2, 1e-9);  // two stops done
+  // Smooth: no jumps in position or yaw, speed never above cruise or below zero.
+  double max_speed = 0, min_speed = 1e9, max_yaw_step = 0;
+  for (double t = 0; t < 40; t += 0.01) {
+    const FlightProgress a = ProgressAt(o, t), b = ProgressAt(o, t + 0.01);
+    max_speed = std::max(max_speed, (b.metres - a.metres) / 0.01);
+    min_speed = std::min(min_speed, (b.metres - a.metres) / 0.01);
+    max_yaw_step = std::max(max_yaw_step, std::abs(b.extra_yaw - a.extra_yaw));
+  }
+  EXPECT_LT(max_speed, o.speed * 1.0001);
+  EXPECT_GE(min_speed, -1e-9);
+  EXPECT_LT(max_yaw_step, 0.01);  // < 0.6 deg per 10 ms: 90 deg over 3 s, eased
+
+  // The rendered trajectory: the camera centre stands still during the hover while it turns.
+  o.frames = 400;
+  o.wobble_deg = 0;
+  const std::vector<SE3> poses = MakeTrajectory(o, Terrain(o));
+  const auto centre = [&](int f) { return poses[f].translation(); };
+  const int f0 = static_cast<int>(std::ceil((5.0 + ramp) * o.fps));
+  const int f1 = static_cast<int>(std::floor((11.0 - ramp) * o.fps)) - 1;
+  EXPECT_LT((centre(f1) - centre(f0)).norm(), 1e-6);
+  const Eigen::Matrix3d turn = (poses[f0].rotation().Inverse() * poses[f1].rotation()).matrix();
+  EXPECT_GT(Eigen::AngleAxisd(turn).angle(), 0.5 * std::numbers::pi / 2);
+}
+
 TEST(SynthFiles, ClipFilesExistParseAndMatch) {
   SynthOptions o = SmallOptions();
   o.out = (fs::path(testing::TempDir()) / "glam_synth_files").string();
@@ -315,6 +362,9 @@ TEST(SynthOptions, CheckRejectsNonsense) {
   rejects([](SynthOptions& o) { o.focal = -1; });
   rejects([](SynthOptions& o) { o.k1 = -0.5; o.k2 = -0.5; });  // not invertible in the image
   rejects([](SynthOptions& o) { o.cell_size = 0; });
+  rejects([](SynthOptions& o) { o.stop_every = -10; });
+  rejects([](SynthOptions& o) { o.stop_every = 50; o.stop_seconds = 0.5; });
+  rejects([](SynthOptions& o) { o.stop_every = 50; o.stop_yaw_deg = 400; });
   EXPECT_THROW(ParseTrajectoryKind("zigzag"), InputError);
   EXPECT_EQ(ParseTrajectoryKind("orbit"), TrajectoryKind::kOrbit);
 }

@@ -1,5 +1,6 @@
 #include "tools/synth/synth_options.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -30,11 +31,19 @@ double SynthOptions::EffectiveFocal() const {
   return 0.5 * width / std::tan(half_fov);
 }
 
+double SynthOptions::StopRampSeconds() const { return std::min(1.5, 0.25 * stop_seconds); }
+
 void SynthOptions::Check() const {
   CheckInRange("synth.altitude", altitude, 20.0, 1000.0);
   CheckInRange("synth.pitch_deg", pitch_deg, 0.0, 80.0);
   CheckInRange("synth.speed", speed, 0.5, 60.0);
   CheckInRange("synth.wobble_deg", wobble_deg, 0.0, 10.0);
+  CheckGreaterEqual("synth.stop_every", stop_every, 0.0);
+  if (stop_every > 0) {
+    CheckInRange("synth.stop_every", stop_every, 1.0, 1e6);
+    CheckInRange("synth.stop_seconds", stop_seconds, 1.0, 600.0);
+    CheckInRange("synth.stop_yaw_deg", stop_yaw_deg, -360.0, 360.0);
+  }
   CheckInRange("synth.fps", fps, 1.0, 240.0);
   CheckInRange("synth.frames", frames, 1, 1000000);
   CheckInRange("synth.width", width, 16, 7680);
@@ -64,7 +73,7 @@ void SynthOptions::Check() const {
 }
 
 nlohmann::json SynthOptions::ToJson() const {
-  return nlohmann::json{{"trajectory", TrajectoryKindName(trajectory)},
+  nlohmann::json j{{"trajectory", TrajectoryKindName(trajectory)},
                         {"altitude", altitude},
                         {"pitch_deg", pitch_deg},
                         {"speed", speed},
@@ -82,6 +91,13 @@ nlohmann::json SynthOptions::ToJson() const {
                         {"building_density", building_density},
                         {"crf", crf},
                         {"generator", "glam synth 1"}};
+  // Only when used, so that clips rendered before the option existed stay up to date.
+  if (stop_every > 0) {
+    j["stop_every"] = stop_every;
+    j["stop_seconds"] = stop_seconds;
+    j["stop_yaw_deg"] = stop_yaw_deg;
+  }
+  return j;
 }
 
 }  // namespace glam::synth

@@ -24,6 +24,13 @@ struct SynthOptions {
   double pitch_deg = 0.0;    // camera tilt forward from nadir: 0 = straight down
   double speed = 10.0;       // m/s along the path
   double wobble_deg = 1.5;   // amplitude of slow, smooth attitude perturbations
+  // Stop-and-yaw, as pilots fly: every `stop_every` metres of path the drone slows down to a
+  // hover, yaws by `stop_yaw_deg` in place, and flies on along the path keeping the new
+  // heading (a nadir camera then sees the ground turned; an oblique one looks elsewhere).
+  // The turn is a pure rotation without parallax, which a mapper has to track through.
+  double stop_every = 0.0;    // metres of path between stops; 0 = never stop
+  double stop_seconds = 6.0;  // each stop: 1.5 s slowing down, the yaw, 1.5 s speeding up
+  double stop_yaw_deg = 90.0; // yaw turned during each stop (added to the path heading)
   double fps = 30.0;
   int frames = 600;
 
@@ -45,6 +52,9 @@ struct SynthOptions {
   bool write_frames = false;  // also write frames/NNNNNN.png
   int crf = 16;               // H.264 quality (lower = better; 16 keeps texture for SIFT)
   bool force = false;         // re-render even if `out` already holds this exact clip
+
+  // The slowing down and the speeding up of a stop (s); the yaw takes the rest of it.
+  double StopRampSeconds() const;
 
   // Focal length actually used (resolves focal == 0).
   double EffectiveFocal() const;

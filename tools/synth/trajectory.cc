@@ -174,6 +174,34 @@ SO3 CameraRotation(double heading, double pitch, double roll) {
   return SO3(Eigen::Matrix3d(rz * base * rx * ry));
 }
 
+FlightProgress ProgressAt(const SynthOptions& o, double t) {
+  if (o.stop_every <= 0) return {o.speed * t, 0.0};
+  const double cruise = o.stop_every / o.speed;          // seconds between stops
+  const double ramp = o.StopRampSeconds();                 // slowing down, speeding up
+  const double hover = o.stop_seconds - 2 * ramp;          // the yaw in place
+  const double per_cycle = o.stop_every + o.speed * ramp;  // each ramp flies speed * ramp / 2
+  const double yaw = o.stop_yaw_deg * kDeg;
+  const double cycle = std::floor(t / (cruise + o.stop_seconds));
+  const double tau = t - cycle * (cruise + o.stop_seconds);
+  const double base = cycle * per_cycle;
+  if (tau < cruise) return {base + o.speed * tau, cycle * yaw};
+  const double sigma = tau - cruise;
+  const double stop_at = base + o.stop_every;
+  // Speed speed * (1 + cos(pi x / ramp)) / 2 while slowing down, its mirror while speeding up.
+  if (sigma < ramp) {
+    return {stop_at + o.speed * (0.5 * sigma + ramp / (2 * kPi) * std::sin(kPi * sigma / ramp)),
+            cycle * yaw};
+  }
+  const double hovered_at = stop_at + 0.5 * o.speed * ramp;
+  if (sigma < ramp + hover) {
+    const double u = (sigma - ramp) / hover;
+    return {hovered_at, (cycle + 0.5 * (1 - std::cos(kPi * u))) * yaw};
+  }
+  const double rho = sigma - ramp - hover;
+  return {hovered_at + o.speed * (0.5 * rho - ramp / (2 * kPi) * std::sin(kPi * rho / ramp)),
+          (cycle + 1) * yaw};
+}
+
 std::vector<SE3> MakeTrajectory(const SynthOptions& o, const TerrainFn& terrain) {
   Rng rng(o.seed * 7919 + 17);
   const double angle = rng.Range(0, 2 * kPi);
@@ -191,9 +219,10 @@ std::vector<SE3> MakeTrajectory(const SynthOptions& o, const TerrainFn& terrain)
     const double pitch = o.pitch_deg * kDeg;
     const double radius = std::max(o.altitude * std::tan(pitch), 0.3 * o.altitude);
     for (int f = 0; f < o.frames; ++f) {
-      const double phi = angle + o.speed * f / o.fps / radius;
+      const FlightProgress p = ProgressAt(o, f / o.fps);
+      const double phi = angle + p.metres / radius;
       xy[f] = radius * Eigen::Vector2d(std::cos(phi), std::sin(phi));
-      heading[f] = phi + kPi;  // look at the centre
+      heading[f] = phi + kPi + p.extra_yaw;  // look at the centre (turned by the stops)
     }
     const int n = static_cast<int>(std::ceil(needed)) + 1;
     for (int k = 0; k <= n; ++k) {
@@ -205,9 +234,9 @@ std::vector<SE3> MakeTrajectory(const SynthOptions& o, const TerrainFn& terrain)
                                    ? LawnmowerPath(o, needed, angle)
                                    : LoopPath(o, needed, angle, rng);
     for (int f = 0; f < o.frames; ++f) {
-      const double s = o.speed * f / o.fps;
-      xy[f] = path.At(s);
-      heading[f] = path.Heading(s);
+      const FlightProgress p = ProgressAt(o, f / o.fps);
+      xy[f] = path.At(p.metres);
+      heading[f] = path.Heading(p.metres) + p.extra_yaw;
     }
     const int n = static_cast<int>(std::ceil(needed)) + 1;
     for (int k = 0; k <= n; ++k) along_path.push_back(path.At(k));
@@ -219,7 +248,7 @@ std::vector<SE3> MakeTrajectory(const SynthOptions& o, const TerrainFn& terrain)
   poses.reserve(o.frames);
   for (int f = 0; f < o.frames; ++f) {
     const double t = f / o.fps;
-    const double s = std::min(o.speed * t, static_cast<double>(ground.size() - 1));
+    const double s = std::min(ProgressAt(o, t).metres, static_cast<double>(ground.size() - 1));
     const std::size_t k = std::min(static_cast<std::size_t>(s), ground.size() - 2);
     const double a = s - k;
     const double z = (1 - a) * ground[k] + a * ground[k + 1] + o.altitude;

@@ -1,6 +1,7 @@
 // Smooth drone flights for the synthetic videos. Paths are C2 curves (a cubic B-spline for
 // the lawnmower, closed analytic curves for loop and orbit) flown at constant speed by
-// arc-length reparameterisation, so velocity and heading never jump. Altitude follows the
+// arc-length reparameterisation, so velocity and heading never jump (optionally with
+// stop-and-yaw hovers, see ProgressAt). Altitude follows the
 // terrain smoothed along the path (like a drone holding height above ground), and a slow
 // attitude wobble adds the small rotations a real gimbal never fully removes.
 #pragma once
@@ -20,6 +21,16 @@ using TerrainFn = std::function<double(double x, double y)>;
 // the image points to, measured counter-clockwise from +x (east); pitch tilts the optical
 // axis from nadir (0) towards that heading.
 SO3 CameraRotation(double heading, double pitch, double roll = 0.0);
+
+// Where the flight is at time t (s): metres flown along the path and the yaw (rad) the stops
+// have added so far (SynthOptions::stop_every). Without stops: speed * t and 0. Speed falls
+// and rises smoothly (raised cosine) around each hover and the yaw eases in and out, so
+// velocity and angular rate never jump.
+struct FlightProgress {
+  double metres = 0;
+  double extra_yaw = 0;
+};
+FlightProgress ProgressAt(const SynthOptions& options, double t);
 
 // world_from_cam for frames 0 .. options.frames - 1 (time = index / fps).
 std::vector<SE3> MakeTrajectory(const SynthOptions& options, const TerrainFn& terrain);
