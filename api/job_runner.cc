@@ -10,10 +10,12 @@ namespace glam::api {
 
 JobRunner::JobRunner(int workers, Work work) : work_(std::move(work)) {
   workers = std::max(1, workers);
-  for (int i = 0; i < workers; ++i) workers_.emplace_back([this] {
+  for (int i = 0; i < workers; ++i) {
+    workers_.emplace_back([this] {
       NameCurrentThread("glam-job");
       WorkerLoop();
     });
+  }
 }
 
 JobRunner::~JobRunner() { Shutdown(); }

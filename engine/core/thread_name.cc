@@ -2,12 +2,10 @@
 
 #include <pthread.h>
 
-#include <algorithm>
-
 namespace glam {
 
 void NameCurrentThread(std::string_view name) {
-  const std::string cut(name.substr(0, std::min(name.size(), kMaxThreadNameLength)));
+  const std::string cut(name.substr(0, kMaxThreadNameLength));
   pthread_setname_np(pthread_self(), cut.c_str());
 }
 

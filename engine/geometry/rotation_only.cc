@@ -20,8 +20,8 @@ void RotationOnlyOptions::Check() const {
 
 namespace {
 
-// Pixel residual of x2 against the rotation model; nullopt-like large value when the rotated
-// ray points away from the second camera.
+// Pixel residual of x2 against the rotation model (true focal = scale x focal_px); a huge
+// residual when the rotated ray points away from the second camera.
 Eigen::Vector2d Residual(const SO3& R, double scale, const TwoViewCorrespondence& d, double focal_px) {
   const Eigen::Vector3d v = R * Eigen::Vector3d(d.x1.x() / scale, d.x1.y() / scale, 1.0);
   if (v.z() <= 1e-9) return Eigen::Vector2d::Constant(1e6);
