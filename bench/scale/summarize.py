@@ -23,26 +23,29 @@ def stage_labels(tids, mains, names):
     return labels
 
 
-def print_stage_cpu(work, t, cpu, n, tenth):
-    """CPU ms per frame by stage in the first and the last tenth. A thread's CPU time counts
-    from its last sample on after it exits; threads that live shorter than the sampling
-    interval (the per-window SIFT helpers) are never sampled and show up as the rest of the
-    process's CPU time."""
+SHORT_LIVED = "short-lived threads (not sampled)"
+
+
+def stage_series(work, t, cpu):
+    """Cumulative CPU seconds by stage against frames done, from threads.tsv: (frames, {stage:
+    array}) or None. A thread's CPU time counts from its last sample on after it exits;
+    threads that live shorter than the sampling interval (the per-window SIFT helpers) are
+    never sampled and show up as the rest of the process's CPU time."""
     path = os.path.join(work, "threads.tsv")
     if cpu is None or not os.path.exists(path):
-        return
+        return None
     rows = np.genfromtxt(path, names=True, delimiter="\t", dtype=None, encoding=None)
     if rows.size == 0:
-        return
+        return None
     labels = stage_labels(list(rows["tid"]), list(rows["is_main"]), list(rows["name"]))
     stages = sorted(set(labels.values()))
     last = {}
     by_time = {}
     for r in rows:
         by_time.setdefault(round(float(r["t_s"]), 1), []).append(r)
-    series = {k: [] for k in stages + ["short-lived threads (not sampled)"]}
+    series = {k: [] for k in stages + [SHORT_LIVED]}
     proc_t = {round(float(x), 1): c for x, c in zip(t, cpu)}
-    ts, frames = [], []
+    frames = []
     for when in sorted(by_time):
         for r in by_time[when]:
             last[int(r["tid"])] = float(r["cpu_s"])
@@ -53,22 +56,44 @@ def print_stage_cpu(work, t, cpu, n, tenth):
             sums[labels[tid]] += c
         for k in stages:
             series[k].append(sums[k])
-        series["short-lived threads (not sampled)"].append(proc_t[when] - sum(sums.values()))
-        ts.append(when)
+        series[SHORT_LIVED].append(proc_t[when] - sum(sums.values()))
         frames.append(max(int(r["frames_done"]) for r in by_time[when]))
     frames = np.array(frames, float)
     keep = np.concatenate([[True], np.diff(frames) > 0])
     if keep.sum() < 4:
-        return
-    f = frames[keep]
+        return None
+    return frames[keep], {k: np.array(v)[keep] for k, v in series.items()}
+
+
+def print_stage_cpu(stages, n, tenth):
+    """CPU ms per frame by stage in the first and the last tenth."""
+    f, series = stages
     a0 = f[0]
     print(f"CPU ms per frame by stage, first tenth (frames {a0:.0f}-{tenth:.0f}) -> last tenth "
           f"({n - tenth:.0f}-{n}):")
     for k, v in series.items():
-        v = np.array(v)[keep]
         first = (np.interp(tenth, f, v) - np.interp(a0, f, v)) / (tenth - a0) * 1000
         last_t = (np.interp(n, f, v) - np.interp(n - tenth, f, v)) / tenth * 1000
         print(f"  {k}: {first:.1f} -> {last_t:.1f} ms ({100 * (last_t / first - 1) if first > 0 else 0:+.0f} %)")
+
+
+def plot_stage_cpu(ax, stages, n):
+    """CPU ms per frame by stage over the run, stacked, in windows of a twentieth of the run.
+    The SIFT helpers caught alive by a sample and those that were not are one band."""
+    f, series = stages
+    merged = {}
+    for k, v in series.items():
+        key = "SIFT helpers" if k in ("glam-sift threads", SHORT_LIVED) else k
+        merged[key] = merged.get(key, 0) + v
+    edges = np.linspace(f[0], n, 21)
+    mid = 0.5 * (edges[1:] + edges[:-1])
+    bands = [(np.diff(np.interp(edges, f, v)) / np.diff(edges) * 1000, k) for k, v in merged.items()]
+    ax.stackplot(mid, *[b for b, _ in bands], labels=[k for _, k in bands], alpha=0.8)
+    ax.set_ylabel("CPU ms per frame")
+    ax.set_xlabel("frames done")
+    ax.set_ylim(0, 1.45 * sum(b for b, _ in bands).max())  # room for the legend above
+    ax.legend(fontsize=7, loc="upper left", ncol=3)
+    ax.grid(alpha=0.3)
 
 
 def main():
@@ -105,6 +130,7 @@ def main():
     print(f"fps in the first tenth (frames 0-{tenth:.0f}): {fps_first:.2f}; last tenth "
           f"(frames {n - tenth:.0f}-{n}): {fps_last:.2f}; decay {100 * (1 - fps_last / fps_first):.1f} %")
     cpu = s["cpu_s"][keep] if "cpu_s" in s.dtype.names else None
+    stages = None
     if cpu is not None:
         def cpu_at(frames):
             return float(np.interp(frames, dd, cpu))
@@ -112,7 +138,9 @@ def main():
         clast = tenth / (cpu_at(n) - cpu_at(n - tenth))
         print(f"frames per CPU second (load-independent): first tenth {cfirst:.2f}, last tenth "
               f"{clast:.2f}; decay {100 * (1 - clast / cfirst):.1f} %; {cpu.max():.0f} CPU s in all")
-        print_stage_cpu(work, s["t_s"], s["cpu_s"], n, tenth)
+        stages = stage_series(work, s["t_s"], s["cpu_s"])
+        if stages is not None:
+            print_stage_cpu(stages, n, tenth)
     if os.path.exists(os.path.join(work, "map_time.txt")):
         wall = float(open(os.path.join(work, "map_time.txt")).read().split()[1])
         print(f"wall time {wall:.0f} s = {int(done.max()) / wall:.2f} fps overall")
@@ -207,7 +235,7 @@ def main():
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    rows = 3 if lat is not None else 2
+    rows = 2 + (lat is not None) + (stages is not None)
     fig, axes = plt.subplots(rows, 1, figsize=(6.5, 2.3 * rows), dpi=80)
     axes[0].plot(mid, fps_w, "C0-", label="frames per wall second")
     if cpu is not None:
@@ -216,7 +244,7 @@ def main():
     axes[0].legend(fontsize=8)
     axes[0].set_ylabel("throughput")
     axes[0].set_xlabel("frames done")
-    axes[0].set_title(f"scale run: {n} frames, 640x360" + ("" if finished else " (partial)"))
+    axes[0].set_title(f"scale run: {int(done.max())} frames, 640x360" + ("" if finished else " (partial)"))
     axes[0].grid(alpha=0.3)
     axes[1].plot(done, rss, "C3-")
     for k in range(1, completed + 1):
@@ -233,6 +261,8 @@ def main():
         axes[2].set_xlabel("submap")
         axes[2].legend(fontsize=8)
         axes[2].grid(alpha=0.3)
+    if stages is not None:
+        plot_stage_cpu(axes[-1], stages, n)
     fig.tight_layout()
     fig.savefig(png)
 
