@@ -45,6 +45,7 @@ void UsePaperMethod(MappingOptions* options) {
   submap.extend_short_final_submap = false;
   submap.isolated_filter_once = false;
   submap.bootstrap_rotation_veto_fraction = 0;
+  submap.focal_profile_step = 0;
   options->alignment.use_shared_frames = false;
   options->alignment.local_window = 0;
 }

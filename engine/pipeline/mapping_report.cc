@@ -75,6 +75,14 @@ std::vector<std::string> Diagnose(const MappingReport& r, int min_features) {
         "`focal` instead of intrinsics)",
         r.focal_original, 100.0 * focal_change, *r.free_focal_original));
   }
+  if (r.focal_held) {
+    warnings.push_back(fmt::format(
+        "the images do not determine the focal length (typical of a camera looking straight down "
+        "at flat ground), so the initial {:.1f} px was kept: heights and distances to the ground "
+        "are off by as much as it is. For an accurate map pass the camera's focal (glam map "
+        "--focal or --intrinsics, or the job option `focal`)",
+        r.focal_original));
+  }
   return warnings;
 }
 
@@ -103,6 +111,9 @@ nlohmann::json MappingReport::ToJson() const {
           {"focal_px", focal},
           {"focal_original_px", focal_original},
           {"free_focal_original_px", free_focal_original ? nlohmann::json(*free_focal_original) : nlohmann::json()},
+          {"focal_held", focal_held},
+          {"focal_profile_rms_increase",
+           focal_profile_rms_increase ? nlohmann::json(*focal_profile_rms_increase) : nlohmann::json()},
           {"fps", fps},
           {"processing_fps", processing_fps},
           {"processing_size", {processing_width, processing_height}},

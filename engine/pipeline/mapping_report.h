@@ -55,6 +55,11 @@ struct MappingReport {
   // With a fixed (calibrated) focal: where the first submap's bundle adjustment takes it when
   // it is free, original-resolution pixels (SubmapOptions::check_fixed_focal); else unset.
   std::optional<double> free_focal_original;
+  // The focal was estimated (not fixed) but the images did not determine it, so it was held
+  // at its initial value (SubmapOptions::focal_profile_step); the profile's smaller relative
+  // rms increase, when it was measured.
+  bool focal_held = false;
+  std::optional<double> focal_profile_rms_increase;
   double fps = 0;            // input frame rate
   double processing_fps = 0; // frames decoded / total time
   int processing_width = 0;

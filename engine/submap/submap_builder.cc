@@ -1,7 +1,9 @@
 #include "engine/submap/submap_builder.h"
 
 #include <algorithm>
+#include <array>
 #include <iterator>
+#include <limits>
 #include <utility>
 #include <cmath>
 
@@ -14,6 +16,9 @@ namespace {
 // How far (frames) the overlap start may move back to reach a detected frame: more than any
 // automatic detection interval (0.2 s at up to 120 fps).
 constexpr std::size_t kMaxOverlapShift = 30;
+// Iteration cap of each fixed-focal adjustment of the focal profile (run once per job; from the
+// free-focal optimum they converge in 8-25 iterations on the clips measured).
+constexpr int kFocalProfileIterations = 100;
 
 }  // namespace
 
@@ -137,6 +142,27 @@ bool SubmapBuilder::RebuildIfFocalMoved(std::vector<Submap>* completed) {
       open_.rebuilds >= options_.max_submap_rebuilds || open_.start_focal <= 0) {
     return false;
   }
+  // Only while no submap has completed: a focal held after one would make the map's submaps
+  // disagree on it (a first submap closed by a tracking loss skips the check).
+  if (!focal_profile_checked_ && options_.focal_profile_step > 0 && completed_keyframe_focals_.empty()) {
+    focal_profile_checked_ = true;
+    const double increase = FocalProfileRmsIncrease();
+    stats_.focal_profile_rms_increase = increase;
+    if (increase < options_.focal_profile_min_rms_increase) {
+      // The open submap was adjusted with the focal free: tracked again at the held focal.
+      GLAM_LOG_WARN("the images do not determine the focal length (fixing it {:.0f} % off the estimate "
+                    "{:.1f} px changes the reprojection rms by {:+.3f} %; nadir view of flat ground?): "
+                    "holding the initial {:.1f} px; tracking the open submap's {} frames again",
+                    100.0 * options_.focal_profile_step, focal_, 100.0 * increase, intrinsics_.fx,
+                    open_.frames.size());
+      stats_.focal_held = true;
+      options_.bundle_adjustment.refine_focal = false;
+      focal_ = intrinsics_.fx;
+      ++stats_.submap_rebuilds;
+      RestartWith(std::move(open_.frames), open_.rebuilds + 1, completed);
+      return true;
+    }
+  }
   const double change = std::abs(focal_ - open_.start_focal) / open_.start_focal;
   if (change <= options_.rebuild_focal_change) return false;
   const int rebuilds = open_.rebuilds + 1;
@@ -149,6 +175,30 @@ bool SubmapBuilder::RebuildIfFocalMoved(std::vector<Submap>* completed) {
   // even rebuild it again, up to the limit) before the current frame is reached.
   RestartWith(std::move(open_.frames), rebuilds, completed);
   return true;
+}
+
+double SubmapBuilder::FocalProfileRmsIncrease() {
+  const double step = options_.focal_profile_step;
+  BundleAdjustmentOptions ba = options_.bundle_adjustment;
+  ba.refine_focal = false;
+  ba.max_iterations = kFocalProfileIterations;
+  std::array<double, 3> rms{};
+  const std::array<double, 3> scales{1.0, 1.0 - step, 1.0 + step};
+  for (std::size_t i = 0; i < scales.size(); ++i) {
+    std::vector<Keyframe> keyframes = open_.keyframes;
+    std::vector<Landmark> landmarks = open_.landmarks;
+    for (Keyframe& kf : keyframes) kf.focal = scales[i] * focal_;
+    const auto summary = BundleAdjust(CurrentCamera().intrinsics(), keyframes, landmarks, ba, cancel_);
+    stats_.bundle_adjust_seconds += summary.seconds;
+    rms[i] = summary.final_rms_pixels;
+  }
+  const double increase = rms[0] > 0 ? std::min(rms[1], rms[2]) / rms[0] - 1.0
+                                     : std::numeric_limits<double>::infinity();
+  GLAM_LOG_INFO("focal profile of the first submap ({} keyframes): rms {:.4f} px at {:.1f} px, "
+                "{:+.3f} % at {:.1f} px, {:+.3f} % at {:.1f} px",
+                open_.keyframes.size(), rms[0], focal_, 100.0 * (rms[1] / rms[0] - 1.0), scales[1] * focal_,
+                100.0 * (rms[2] / rms[0] - 1.0), scales[2] * focal_);
+  return increase;
 }
 
 void SubmapBuilder::RestartWith(std::deque<FrameRecord> frames, int rebuilds,

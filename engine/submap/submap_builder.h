@@ -41,6 +41,11 @@ struct SubmapBuilderStats {
   // Where the first completed submap's bundle adjustment takes a fixed focal when it is let
   // free (processing pixels; SubmapOptions::check_fixed_focal). Unset while refining anyway.
   std::optional<double> free_focal_px;
+  // SubmapOptions::focal_profile_step: the smaller relative rms increase of the two fixed-focal
+  // adjustments either side of the estimate (unset when not checked), and whether the focal
+  // was therefore held at its initial value.
+  std::optional<double> focal_profile_rms_increase;
+  bool focal_held = false;
 };
 
 class SubmapBuilder {
@@ -109,6 +114,10 @@ class SubmapBuilder {
   // SubmapOptions::rebuild_focal_change since the submap started; the replay then goes on as
   // usual (and completes it). Returns whether it did.
   bool RebuildIfFocalMoved(std::vector<Submap>* completed);
+  // SubmapOptions::focal_profile_step, on the open submap: the smaller relative rms increase
+  // of fixing the focal (1 -/+ step) times the estimate instead of at it (each adjusted to
+  // convergence on a copy).
+  double FocalProfileRmsIncrease();
   // Starts a new open submap at frames.front() (its `rebuilds` count set) and feeds the other
   // frames, kept in memory, through Process() again, forgetting their earlier poses. Shared by
   // the overlap hand-off and the rebuild.
@@ -155,6 +164,7 @@ class SubmapBuilder {
   CancellationToken cancel_;
   double focal_;
   std::vector<double> completed_keyframe_focals_;  // for the running median
+  bool focal_profile_checked_ = false;
   OpenSubmap open_;
   // Frames of the last completed submap from its middle keyframe to the overlap start, kept
   // so that a short submap closed by the end of input can be rebuilt over them (Finish()).

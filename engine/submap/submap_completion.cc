@@ -125,7 +125,11 @@ void SubmapBuilder::RelocaliseFrames(const std::vector<bool>& keep) {
 }
 
 void SubmapBuilder::CheckFixedFocal() {
-  if (!options_.check_fixed_focal || options_.bundle_adjustment.refine_focal || stats_.free_focal_px) return;
+  // A focal held because the images do not determine it (focal profile) has nothing to check.
+  if (!options_.check_fixed_focal || options_.bundle_adjustment.refine_focal || stats_.free_focal_px ||
+      stats_.focal_held) {
+    return;
+  }
   std::vector<Keyframe> keyframes = open_.keyframes;
   std::vector<Landmark> landmarks = open_.landmarks;
   BundleAdjustmentOptions ba = options_.bundle_adjustment;
