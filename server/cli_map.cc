@@ -140,7 +140,8 @@ void RegisterMapCommand(CLI::App& app) {
                   "kept fixed unless --refine-focal; for a focal from EXIF or a data sheet add --refine-focal "
                   "or use --focal)");
   cmd->add_option("--focal", args->focal,
-                  "Focal length in pixels at original resolution (default: 0.8 x long side, refined)");
+                  "Focal length in pixels at original resolution (default: 0.8 x long side), refined; "
+                  "kept as given when the footage does not determine it (report.json focal_held)");
   cmd->add_flag("--refine-focal", args->refine_focal,
                "Refine the focal length of --intrinsics too (always refined without them)");
   cmd->add_flag("--per-keyframe-focal", args->per_keyframe_focal,

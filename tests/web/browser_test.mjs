@@ -278,7 +278,16 @@ async function main() {
     const align = (report.alignment && report.alignment.per_submap) || [];
     console.log(`BENCH   server alignment per submap (report.json total_s): ${stats(align.map((a) => a.total_s * 1000))}`);
 
-    // 6. A standard 3D Tiles client on the quantized tileset, from a page of the same origin.
+    // 6. The start page's job table shows the job with its warnings (the job JSON's; on this
+    // clip usually the undetermined focal length of a short nadir flight).
+    await page.goto(`${base}/?token=${TOKEN}`);
+    await page.waitForSelector(`#jobs tr[data-id="${jobId}"]`, { timeout: 30_000 });
+    const shownWarnings = await page.$$eval(`#jobs tr[data-id="${jobId}"] .warning`, (els) => els.map((e) => e.textContent));
+    check(JSON.stringify(shownWarnings) === JSON.stringify(job.warnings || []),
+      `job table warnings ${JSON.stringify(shownWarnings)} == job JSON warnings ${JSON.stringify(job.warnings)}`);
+    console.log(`job table: ${shownWarnings.length} warning(s) shown`);
+
+    // 7. A standard 3D Tiles client on the quantized tileset, from a page of the same origin.
     const clientPage = await browser.newPage();
     clientPage.on('pageerror', (e) => console.log(`tiles client page error: ${e.message}`));
     await clientPage.route(`${base}/__browser_test/tiles.html`, (route) => route.fulfill({

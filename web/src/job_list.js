@@ -12,6 +12,12 @@ const DOWNLOADS = [
   ['report', 'report.json'],
 ];
 
+// What the run could not do well (textureless frames, an undetermined focal length, ...):
+// the job JSON's `warnings`, the same sentences as report.json.
+function warnings(job) {
+  return (job.warnings || []).map((w) => `<div class="warning">${escapeHtml(w)}</div>`).join('');
+}
+
 function row(job) {
   const p = job.progress || {};
   const fraction = jobFraction(job);
@@ -24,7 +30,7 @@ function row(job) {
     : '';
   return `<tr data-id="${escapeHtml(job.id)}" data-state="${escapeHtml(job.state)}">
     <td><a href="?job=${encodeURIComponent(job.id)}">${escapeHtml(job.name || job.id)}</a></td>
-    <td class="state ${escapeHtml(job.state)}">${escapeHtml(job.state)}${job.error ? `<div class="error">${escapeHtml(job.error)}</div>` : ''}</td>
+    <td class="state ${escapeHtml(job.state)}">${escapeHtml(job.state)}${job.error ? `<div class="error">${escapeHtml(job.error)}</div>` : ''}${warnings(job)}</td>
     <td><progress max="1" ${fraction === null ? '' : `value="${fraction}"`}></progress>
         <span class="small">${escapeHtml(p.stage || '')} ${formatCount(p.frames_done)}/${p.frames_total > 0 ? formatCount(p.frames_total) : '?'}</span></td>
     <td>${active ? formatDuration(p.eta_s) : '–'}</td>
