@@ -113,6 +113,7 @@ ResumeCheckpoint MakeCheckpoint(const SubmapBuilder& builder, const std::vector<
                        ? completed[i + 1].first_frame
                        : builder.open_submap_first_frame().value_or(completed[i].last_frame + 1);
   c.focal = builder.focal();
+  c.focal_held = builder.stats().focal_held;
   c.input = report.input;
   c.processing_width = report.processing_width;
   c.processing_height = report.processing_height;
@@ -168,7 +169,7 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
                 report.frames_total, intrinsics.fx);
 
   SubmapBuilder builder(intrinsics, options.submap, cancel);
-  if (resume) builder.ResumeAt(resume->next_submap_id);
+  if (resume) builder.ResumeAt(resume->next_submap_id, resume->focal_held);
   SubmapAligner aligner(vocabulary, options.alignment, submaps_root, cancel);
   // Each published revision aligned at most one submap, so the interrupted run never got past
   // revision next_submap_id: continuing after it keeps revisions growing for the job's readers.

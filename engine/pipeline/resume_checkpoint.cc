@@ -15,6 +15,7 @@ void WriteCheckpoint(const std::filesystem::path& out_dir, const ResumeCheckpoin
   const nlohmann::json json = {{"next_submap_id", c.next_submap_id},
                                {"resume_frame", c.resume_frame},
                                {"focal_px", c.focal},
+                               {"focal_held", c.focal_held},
                                {"input", c.input},
                                {"processing_size", {c.processing_width, c.processing_height}},
                                {"run_id", c.run_id}};
@@ -31,6 +32,7 @@ std::optional<ResumeCheckpoint> ReadCheckpoint(const std::filesystem::path& out_
     c.next_submap_id = json.at("next_submap_id").get<std::uint32_t>();
     c.resume_frame = json.at("resume_frame").get<std::int64_t>();
     c.focal = json.at("focal_px").get<double>();
+    c.focal_held = json.value("focal_held", false);  // absent in checkpoints written before it existed
     c.input = json.at("input").get<std::string>();
     c.processing_width = json.at("processing_size").at(0).get<int>();
     c.processing_height = json.at("processing_size").at(1).get<int>();

@@ -17,6 +17,9 @@ struct ResumeCheckpoint {
   std::uint32_t next_submap_id = 0;
   std::int64_t resume_frame = 0;  // input frame index (FrameSource::SeekTo)
   double focal = 0;               // processing pixels
+  // The focal was held at its initial value (SubmapOptions::focal_profile_step): the resumed
+  // run keeps it fixed too, so the submaps before and after agree on it.
+  bool focal_held = false;
   // What the checkpoint belongs to: a different input or processing size cannot resume.
   std::string input;
   int processing_width = 0;

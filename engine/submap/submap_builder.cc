@@ -36,9 +36,14 @@ Camera SubmapBuilder::CurrentCamera() const {
   return Camera(in);
 }
 
-void SubmapBuilder::ResumeAt(std::uint32_t next_submap_id) {
+void SubmapBuilder::ResumeAt(std::uint32_t next_submap_id, bool focal_held) {
   GLAM_CHECK(stats_.frames_seen == 0, "ResumeAt after frames were added");
   next_submap_id_ = next_submap_id;
+  if (focal_held && options_.bundle_adjustment.refine_focal) {
+    stats_.focal_held = true;
+    options_.bundle_adjustment.refine_focal = false;
+    focal_profile_checked_ = true;
+  }
 }
 
 std::optional<std::int64_t> SubmapBuilder::open_submap_first_frame() const {

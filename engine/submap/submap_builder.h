@@ -67,8 +67,10 @@ class SubmapBuilder {
   double focal() const { return focal_; }
   const SubmapBuilderStats& stats() const { return stats_; }
   // Continue a resumed run: the first submap this builder completes gets `next_submap_id`
-  // (ids stay unique in the job's submaps/ folder). Only before the first AddFrame.
-  void ResumeAt(std::uint32_t next_submap_id);
+  // (ids stay unique in the job's submaps/ folder). `focal_held`: the interrupted run held the
+  // focal at its initial value (SubmapOptions::focal_profile_step), so this one keeps the
+  // focal it was constructed with fixed as well. Only before the first AddFrame.
+  void ResumeAt(std::uint32_t next_submap_id, bool focal_held = false);
   // Id the next completed submap will get; also the number of submaps emitted so far.
   std::uint32_t next_submap_id() const { return next_submap_id_; }
   // Frame index of the first frame of the open submap (resume point), if any.

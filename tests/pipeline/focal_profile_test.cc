@@ -7,13 +7,16 @@
 #include <cmath>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 #include <string>
 
 #include <gtest/gtest.h>
 
+#include "engine/core/error.h"
 #include "engine/core/intrinsics_io.h"
 #include "engine/pipeline/mapping_job.h"
 #include "engine/pipeline/mapping_report.h"
+#include "engine/pipeline/resume_checkpoint.h"
 #include "tools/eval/evaluation.h"
 
 namespace glam {
@@ -78,6 +81,49 @@ TEST(FocalProfile, AnUndeterminedFocalIsHeldAtItsInitialValue) {
   EXPECT_GT(wandered.result.trajectory.ate_rmse, 1.5 * held.result.trajectory.ate_rmse);
   ASSERT_TRUE(wandered.result.map.has_value());
   EXPECT_GT(wandered.result.map->median, 2 * held.result.map->median);
+}
+
+TEST(FocalProfile, AHeldFocalStaysHeldWhenTheRunIsResumed) {
+  const fs::path out = fs::temp_directory_path() / "glam_focal_profile_resume";
+  fs::remove_all(out);
+  CancellationToken cancel;
+  auto stop_after_two = [&](const MappingProgress& p) {
+    if (p.submaps_completed >= 2) cancel.Cancel();
+  };
+  EXPECT_THROW(RunMapping(kLoopClip / "video.mp4", out, MappingOptions(), stop_after_two, cancel), Cancelled);
+  const std::optional<ResumeCheckpoint> checkpoint = ReadCheckpoint(out);
+  ASSERT_TRUE(checkpoint.has_value());
+  EXPECT_TRUE(checkpoint->focal_held);
+
+  MappingOptions resume;
+  resume.resume = true;
+  const MappingReport report = RunMapping(kLoopClip / "video.mp4", out, resume);
+  EXPECT_EQ(report.resumed_from_frame, checkpoint->resume_frame);
+  EXPECT_TRUE(report.focal_held);
+  EXPECT_NEAR(report.focal, checkpoint->focal, 1e-9);  // not refined after the resume
+  EXPECT_NEAR(report.focal, report.initial_focal, 1e-9);
+  EXPECT_TRUE(HasHeldWarning(report));
+  EXPECT_FALSE(report.free_focal_original.has_value());  // no fixed-focal check either
+  fs::remove_all(out);
+}
+
+TEST(FocalProfile, CheckpointKeepsTheHeldFocal) {
+  const fs::path out = fs::temp_directory_path() / "glam_focal_profile_checkpoint";
+  fs::remove_all(out);
+  fs::create_directories(out);
+  ResumeCheckpoint c;
+  c.next_submap_id = 3;
+  c.resume_frame = 100;
+  c.focal = 512;
+  c.input = "video.mp4";
+  c.focal_held = true;
+  WriteCheckpoint(out, c);
+  ASSERT_TRUE(ReadCheckpoint(out).has_value());
+  EXPECT_TRUE(ReadCheckpoint(out)->focal_held);
+  c.focal_held = false;
+  WriteCheckpoint(out, c);
+  EXPECT_FALSE(ReadCheckpoint(out)->focal_held);
+  fs::remove_all(out);
 }
 
 TEST(FocalProfile, ADeterminedFocalIsStillEstimated) {
