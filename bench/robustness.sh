@@ -5,7 +5,8 @@
 # Renders twelve synthetic 600-frame clips at 640x360 with `glam synth` (skipped when already
 # rendered; seeds 41-52, used by no test), each changing one thing from the lawnmower at
 # 100 m: speed, altitude, lens, distortion, trajectory, terrain, compression, pitch, frame
-# rate. Maps each one as a user without a calibration would (`glam map`, no intrinsics: the
+# rate; and derives five more from the lawnmower clip with ffmpeg filters (an on-screen
+# display, exposure flicker, defocus, motion blur, a 3 s freeze of the stream). Maps each one as a user without a calibration would (`glam map`, no intrinsics: the
 # focal is estimated from the 0.8 x long-side guess) and, with CALIBRATED=1, also with the
 # clip's true intrinsics. Prints one row per run: estimated focal against the truth, whether
 # it was held (docs/algorithm.md, focal length), submaps, posed frames, ATE after Sim3 and the
@@ -35,12 +36,60 @@ declare -A CLIP=(
   [fps24]="--trajectory loop --fps 24 --wobble-deg 4 --seed 52"
 )
 ORDER="lawnmower fast low wide_lens narrow_lens distorted orbit flat crf32 pitch60 high fps24"
+# Derived from the lawnmower clip by an ffmpeg filter (Debian's ffmpeg, re-encoded at CRF 16);
+# the ground truth is copied, and where the filter changes what a frame shows, adjusted.
+declare -A DERIVED=(
+  [osd]="ffmpeg: static on-screen display (text box with a running clock, frame marker)"
+  [flicker]="ffmpeg: brightness +-0.12 and contrast +-20 % oscillating (eq)"
+  [defocus]="ffmpeg: Gaussian blur sigma 2 px (gblur)"
+  [motion_blur]="ffmpeg: each frame the mean of three (tmix; ~3.7 px smear)"
+  [freeze]="ffmpeg: frames 201-290 repeat frame 200, then a 30 m jump (freezeframes)"
+)
+DERIVED_ORDER="osd flicker defocus motion_blur freeze"
 
-printf "| clip | synth arguments | run | focal (truth) | held | submaps | posed | ATE | map median |\n"
+printf "| clip | synth arguments (or derivation) | run | focal (truth) | held | submaps | posed | ATE | map median |\n"
 printf "|---|---|---|---|---|---|---|---|---|\n"
-for name in $ORDER; do
-  # shellcheck disable=SC2086  # the clip's arguments are words
-  "$GLAM" --log-level warn synth $BASE ${CLIP[$name]} --out "$WORK/$name/gt" > /dev/null
+# derive NAME: WORK/NAME/gt from WORK/lawnmower/gt through DERIVED[NAME] (skipped when done).
+derive() {
+  local name=$1 src="$WORK/lawnmower/gt" dst="$WORK/$1/gt"
+  [ -f "$dst/video.mp4" ] && [ "$dst/video.mp4" -nt "$src/video.mp4" ] && return 0
+  mkdir -p "$dst"
+  cp "$src"/*.json "$src"/*.f32 "$dst"/
+  local filter
+  case "$name" in
+    osd) filter=(-vf "drawbox=x=10:y=10:w=200:h=40:color=black@0.6:t=fill,drawtext=text='REC %{pts\\:hms}  ALT 100m':x=15:y=20:fontsize=16:fontcolor=white,drawbox=x=540:y=300:w=90:h=50:color=white@0.8:t=3") ;;
+    flicker) filter=(-vf "eq=brightness='0.12*sin(2*t)':contrast='1+0.2*sin(1.3*t)':eval=frame") ;;
+    defocus) filter=(-vf "gblur=sigma=2") ;;
+    motion_blur) filter=(-vf "tmix=frames=3") ;;
+    freeze) filter=(-filter_complex "[0:v]split[a][b];[a][b]freezeframes=first=200:last=290:replace=200") ;;
+  esac
+  ffmpeg -v error -y -i "$src/video.mp4" "${filter[@]}" -c:v libx264 -crf 16 -pix_fmt yuv420p "$dst/video.mp4"
+  python3 - "$src/gt_trajectory.tum" "$dst/gt_trajectory.tum" "$name" <<'PY'
+import sys
+src, dst, name = sys.argv[1:4]
+lines = open(src).read().splitlines()
+header = [l for l in lines if l.startswith("#")]
+poses = [l.split() for l in lines if l.strip() and not l.startswith("#")]
+out = []
+for k, p in enumerate(poses):
+    if name == "motion_blur":  # frame k averages frames k-2..k: it shows frame k-1's view
+        shown = poses[max(k - 1, 0)]
+    elif name == "freeze" and 200 < k <= 290:  # frames 201-290 repeat frame 200
+        shown = poses[200]
+    else:
+        shown = p
+    out.append(" ".join([p[0]] + shown[1:]))
+open(dst, "w").write("\n".join(header + out) + "\n")
+PY
+}
+
+for name in $ORDER $DERIVED_ORDER; do
+  if [ -n "${CLIP[$name]:-}" ]; then
+    # shellcheck disable=SC2086  # the clip's arguments are words
+    "$GLAM" --log-level warn synth $BASE ${CLIP[$name]} --out "$WORK/$name/gt" > /dev/null
+  else
+    derive "$name"
+  fi
   runs="uncalibrated"
   [ "${CALIBRATED:-0}" = 1 ] && runs="$runs calibrated"
   for run in $runs; do
@@ -50,7 +99,8 @@ for name in $ORDER; do
     "$GLAM" --log-level warn map "$WORK/$name/gt/video.mp4" "${args[@]}" --out "$out" > "$out.log" 2>&1 \
       || { tail -5 "$out.log"; exit 1; }
     "$GLAM" --log-level warn eval --gt "$WORK/$name/gt" --result "$out" --json "$out/eval.json" > /dev/null
-    python3 - "$out" "$WORK/$name/gt" "$name" "$run" "${CLIP[$name]}" <<'PY'
+    how="${CLIP[$name]:-${DERIVED[$name]:-}}"
+    python3 - "$out" "$WORK/$name/gt" "$name" "$run" "$how" <<'PY'
 import json, sys
 out, gt, name, run, synth = sys.argv[1:6]
 truth = json.load(open(f"{gt}/intrinsics.json"))["fx"]

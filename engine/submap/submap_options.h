@@ -125,7 +125,7 @@ struct SubmapOptions {
   // (relative), the images do not single the estimate out: the focal returns to its initial
   // value (the guess, or glam map --focal) and stays fixed for the rest of the run, the
   // submap is tracked again at it, and the report warns. Measured at 10 %: oblique clips
-  // +26 % and more, nadir clips with relief +0.05 to +0.6 % (estimates within 2 % of the
+  // +9 % and more, nadir clips with relief +0.05 to +0.6 % (estimates within 2 % of the
   // truth), the two failures -0.05 % and -0.03 % (the estimate sat on a slope, held there by
   // the prior). Three bundle adjustments, once (0.2-1 s at 640x360). 0 = off (the paper).
   double focal_profile_step = 0.1;
