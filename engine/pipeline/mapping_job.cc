@@ -329,6 +329,7 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   const auto to_original = [&info](double px) { return info.scale > 0 ? px / info.scale : px; };
   report.focal_original = to_original(builder.focal());
   if (stats.free_focal_px) report.free_focal_original = to_original(*stats.free_focal_px);
+  report.free_focal_rms_gain = stats.free_focal_rms_gain;
   report.focal_held = stats.focal_held;
   report.focal_profile_rms_increase = stats.focal_profile_rms_increase;
   report.input_ended_early = source->ended_early();

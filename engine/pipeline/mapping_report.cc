@@ -67,7 +67,8 @@ std::vector<std::string> Diagnose(const MappingReport& r, int min_features) {
   }
   const double focal_change =
       r.free_focal_original && r.focal_original > 0 ? *r.free_focal_original / r.focal_original - 1.0 : 0.0;
-  if (std::abs(focal_change) > kFixedFocalWarningFraction) {
+  if (std::abs(focal_change) > kFixedFocalWarningFraction &&
+      r.free_focal_rms_gain.value_or(1.0) >= kFixedFocalMinRmsGain) {
     warnings.push_back(fmt::format(
         "the fixed focal length ({:.1f} px) looks {:+.0f} % off: let free, the first submap's "
         "bundle adjustment moves it to {:.1f} px. Unless it comes from a calibration, map again "
@@ -111,6 +112,7 @@ nlohmann::json MappingReport::ToJson() const {
           {"focal_px", focal},
           {"focal_original_px", focal_original},
           {"free_focal_original_px", free_focal_original ? nlohmann::json(*free_focal_original) : nlohmann::json()},
+          {"free_focal_rms_gain", free_focal_rms_gain ? nlohmann::json(*free_focal_rms_gain) : nlohmann::json()},
           {"focal_held", focal_held},
           {"focal_profile_rms_increase",
            focal_profile_rms_increase ? nlohmann::json(*focal_profile_rms_increase) : nlohmann::json()},

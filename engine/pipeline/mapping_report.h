@@ -55,6 +55,9 @@ struct MappingReport {
   // With a fixed (calibrated) focal: where the first submap's bundle adjustment takes it when
   // it is free, original-resolution pixels (SubmapOptions::check_fixed_focal); else unset.
   std::optional<double> free_focal_original;
+  // How much lower (relative) the reprojection rms is with the focal free than fixed; set
+  // with free_focal_original.
+  std::optional<double> free_focal_rms_gain;
   // The focal was estimated (not fixed) but the images did not determine it, so it was held
   // at its initial value (SubmapOptions::focal_profile_step); the profile's smaller relative
   // rms increase, when it was measured.
@@ -78,6 +81,11 @@ struct MappingReport {
 // probably wrong: on nine synthetic videos the true focal moves by at most 1.1 %, a wrong one
 // comes back to within 3.3 % of the truth (SubmapOptions::check_fixed_focal).
 inline constexpr double kFixedFocalWarningFraction = 0.05;
+// ... and only when letting it free lowers the reprojection rms by at least this fraction:
+// a wrong focal measured 0.24 % (12 % long on a synthetic lawnmower) and 0.70 % (EXIF focal of
+// the Brighton Beach photos, 17 % short); the true focal of blurred or heavily compressed
+// clips, which the free adjustment moved 6-9 % for nothing, 0.02-0.05 % (bench/robustness.sh).
+inline constexpr double kFixedFocalMinRmsGain = 0.001;
 
 // The user-facing explanation of what could not be mapped (MappingReport::warnings).
 std::vector<std::string> Diagnose(const MappingReport& report, int min_features);

@@ -41,6 +41,9 @@ struct SubmapBuilderStats {
   // Where the first completed submap's bundle adjustment takes a fixed focal when it is let
   // free (processing pixels; SubmapOptions::check_fixed_focal). Unset while refining anyway.
   std::optional<double> free_focal_px;
+  // How much lower the free focal's reprojection rms is than the fixed one's (relative, >= 0
+  // up to solver noise); set with free_focal_px.
+  std::optional<double> free_focal_rms_gain;
   // SubmapOptions::focal_profile_step: the smaller relative rms increase of the two fixed-focal
   // adjustments either side of the estimate (unset when not checked), and whether the focal
   // was therefore held at its initial value.

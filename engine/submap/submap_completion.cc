@@ -150,6 +150,8 @@ void SubmapBuilder::CheckFixedFocal() {
   const auto free = BundleAdjust(CurrentCamera().intrinsics(), keyframes, landmarks, ba, cancel_);
   stats_.bundle_adjust_seconds += fixed.seconds + free.seconds;
   stats_.free_focal_px = keyframes.front().focal;
+  stats_.free_focal_rms_gain =
+      fixed.final_rms_pixels > 0 ? 1.0 - free.final_rms_pixels / fixed.final_rms_pixels : 0.0;
   GLAM_LOG_INFO("fixed focal check: {:.1f} px given, {:.1f} px preferred with the focal free ({:+.1f} %; "
                 "rms {:.4f} px fixed, {:.4f} px free; {:.2f} s)",
                 focal_, *stats_.free_focal_px, 100.0 * (*stats_.free_focal_px / focal_ - 1.0),

@@ -58,6 +58,9 @@ TEST(FixedFocalCheck, AWrongFixedFocalIsFoundAndReportedTheRightOneIsNot) {
   EXPECT_NEAR(wrong.focal_original, 1.12 * truth, 1e-6);  // still held fixed: only a warning
   EXPECT_LT(std::abs(*wrong.free_focal_original / truth - 1.0), 0.02) << *wrong.free_focal_original;
   EXPECT_TRUE(HasFocalWarning(wrong));
+  // Measured 0.24 %: above the gate that keeps blurred clips from warning.
+  ASSERT_TRUE(wrong.free_focal_rms_gain.has_value());
+  EXPECT_GE(*wrong.free_focal_rms_gain, kFixedFocalMinRmsGain);
   EXPECT_TRUE(wrong.ToJson().at("free_focal_original_px").is_number());
 }
 
@@ -81,6 +84,12 @@ TEST(FixedFocalCheck, DiagnoseWarnsOnlyBeyondTheThresholdAndOnlyWhenChecked) {
   ASSERT_EQ(Diagnose(r, 20).size(), 1u);
   EXPECT_NE(Diagnose(r, 20)[0].find("-6 % off"), std::string::npos) << Diagnose(r, 20)[0];
   EXPECT_TRUE(r.ToJson().at("free_focal_original_px").is_number());
+  // A move that barely lowers the rms (blur, compression noise) is not evidence of a wrong focal.
+  r.free_focal_rms_gain = 0.4 * kFixedFocalMinRmsGain;
+  EXPECT_TRUE(Diagnose(r, 20).empty());
+  r.free_focal_rms_gain = 2.0 * kFixedFocalMinRmsGain;
+  EXPECT_EQ(Diagnose(r, 20).size(), 1u);
+  EXPECT_TRUE(r.ToJson().at("free_focal_rms_gain").is_number());
 }
 
 }  // namespace
