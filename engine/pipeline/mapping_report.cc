@@ -8,6 +8,11 @@
 namespace glam {
 namespace {
 
+// Unset optional measures are null in report.json.
+nlohmann::json NullIfUnset(const std::optional<double>& value) {
+  return value ? nlohmann::json(*value) : nlohmann::json();
+}
+
 // Per submap timings plus the summary a user looks for first: does thread 2 keep up?
 nlohmann::json AlignmentJson(const std::vector<SubmapAlignmentTiming>& timings) {
   nlohmann::json per_submap = nlohmann::json::array();
@@ -111,11 +116,10 @@ nlohmann::json MappingReport::ToJson() const {
           {"sift_max_features", sift_max_features},
           {"focal_px", focal},
           {"focal_original_px", focal_original},
-          {"free_focal_original_px", free_focal_original ? nlohmann::json(*free_focal_original) : nlohmann::json()},
-          {"free_focal_rms_gain", free_focal_rms_gain ? nlohmann::json(*free_focal_rms_gain) : nlohmann::json()},
+          {"free_focal_original_px", NullIfUnset(free_focal_original)},
+          {"free_focal_rms_gain", NullIfUnset(free_focal_rms_gain)},
           {"focal_held", focal_held},
-          {"focal_profile_rms_increase",
-           focal_profile_rms_increase ? nlohmann::json(*focal_profile_rms_increase) : nlohmann::json()},
+          {"focal_profile_rms_increase", NullIfUnset(focal_profile_rms_increase)},
           {"fps", fps},
           {"processing_fps", processing_fps},
           {"processing_size", {processing_width, processing_height}},

@@ -39,11 +39,7 @@ Camera SubmapBuilder::CurrentCamera() const {
 void SubmapBuilder::ResumeAt(std::uint32_t next_submap_id, bool focal_held) {
   GLAM_CHECK(stats_.frames_seen == 0, "ResumeAt after frames were added");
   next_submap_id_ = next_submap_id;
-  if (focal_held && options_.bundle_adjustment.refine_focal) {
-    stats_.focal_held = true;
-    options_.bundle_adjustment.refine_focal = false;
-    focal_profile_checked_ = true;
-  }
+  if (focal_held && options_.bundle_adjustment.refine_focal) HoldInitialFocal();
 }
 
 std::optional<std::int64_t> SubmapBuilder::open_submap_first_frame() const {
@@ -147,10 +143,10 @@ bool SubmapBuilder::RebuildIfFocalMoved(std::vector<Submap>* completed) {
       open_.rebuilds >= options_.max_submap_rebuilds || open_.start_focal <= 0) {
     return false;
   }
-  // Only while no submap has completed: a focal held after one would make the map's submaps
-  // disagree on it (a first submap closed by a tracking loss skips the check).
-  if (!focal_profile_checked_ && options_.focal_profile_step > 0 && completed_keyframe_focals_.empty()) {
-    focal_profile_checked_ = true;
+  // Once, and only while no submap has completed: a focal held after one would make the map's
+  // submaps disagree on it (a first submap closed by a tracking loss skips the check).
+  if (!stats_.focal_profile_rms_increase && options_.focal_profile_step > 0 &&
+      completed_keyframe_focals_.empty()) {
     const double increase = FocalProfileRmsIncrease();
     stats_.focal_profile_rms_increase = increase;
     if (increase < options_.focal_profile_min_rms_increase) {
@@ -160,9 +156,7 @@ bool SubmapBuilder::RebuildIfFocalMoved(std::vector<Submap>* completed) {
                     "holding the initial {:.1f} px; tracking the open submap's {} frames again",
                     100.0 * options_.focal_profile_step, focal_, 100.0 * increase, intrinsics_.fx,
                     open_.frames.size());
-      stats_.focal_held = true;
-      options_.bundle_adjustment.refine_focal = false;
-      focal_ = intrinsics_.fx;
+      HoldInitialFocal();
       ++stats_.submap_rebuilds;
       RestartWith(std::move(open_.frames), open_.rebuilds + 1, completed);
       return true;
@@ -180,6 +174,12 @@ bool SubmapBuilder::RebuildIfFocalMoved(std::vector<Submap>* completed) {
   // even rebuild it again, up to the limit) before the current frame is reached.
   RestartWith(std::move(open_.frames), rebuilds, completed);
   return true;
+}
+
+void SubmapBuilder::HoldInitialFocal() {
+  stats_.focal_held = true;
+  options_.bundle_adjustment.refine_focal = false;  // also ends the rebuilds and the profile
+  focal_ = intrinsics_.fx;
 }
 
 double SubmapBuilder::FocalProfileRmsIncrease() {

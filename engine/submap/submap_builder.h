@@ -123,6 +123,9 @@ class SubmapBuilder {
   // of fixing the focal (1 -/+ step) times the estimate instead of at it (each adjusted to
   // convergence on a copy).
   double FocalProfileRmsIncrease();
+  // The focal goes back to the builder's initial one and stays fixed (stats().focal_held); the
+  // caller re-tracks the open submap if it was adjusted with another.
+  void HoldInitialFocal();
   // Starts a new open submap at frames.front() (its `rebuilds` count set) and feeds the other
   // frames, kept in memory, through Process() again, forgetting their earlier poses. Shared by
   // the overlap hand-off and the rebuild.
@@ -169,7 +172,6 @@ class SubmapBuilder {
   CancellationToken cancel_;
   double focal_;
   std::vector<double> completed_keyframe_focals_;  // for the running median
-  bool focal_profile_checked_ = false;
   OpenSubmap open_;
   // Frames of the last completed submap from its middle keyframe to the overlap start, kept
   // so that a short submap closed by the end of input can be rebuilt over them (Finish()).
