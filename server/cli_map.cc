@@ -31,6 +31,7 @@ struct MapArgs {
   double focal = 0;
   bool refine_focal = false;
   bool per_keyframe_focal = false;
+  bool fixed_k1 = false;
   std::string vocabulary_path;
   bool max_features_given = false;  // --max-features on the command line
   bool paper = false;
@@ -84,7 +85,9 @@ void RunMap(MapArgs& args) {
     // A calibration is trusted: its focal stays fixed unless asked otherwise (on flat nadir
     // footage focal length trades off against altitude, so refining it costs accuracy).
     args.options.submap.bundle_adjustment.refine_focal = args.refine_focal;
+    args.options.submap.bundle_adjustment.refine_k1 = false;  // a calibration's distortion is kept
   }
+  if (args.fixed_k1) args.options.submap.bundle_adjustment.refine_k1 = false;
   if (args.focal != 0) args.options.focal_px = args.focal;
   if (args.per_keyframe_focal) args.options.submap.bundle_adjustment.share_focal = false;
   if (!args.vocabulary_path.empty()) args.options.vocabulary = args.vocabulary_path;
@@ -144,6 +147,9 @@ void RegisterMapCommand(CLI::App& app) {
                   "kept as given when the footage does not determine it (report.json focal_held)");
   cmd->add_flag("--refine-focal", args->refine_focal,
                "Refine the focal length of --intrinsics too (always refined without them)");
+  cmd->add_flag("--fixed-k1", args->fixed_k1,
+               "Do not estimate the lens' radial distortion k1 (0, or the k1 of --intrinsics, "
+               "which is never re-estimated); by default one k1 per flight is estimated");
   cmd->add_flag("--per-keyframe-focal", args->per_keyframe_focal,
                "Bundle adjustment refines one focal per keyframe (the paper) instead of one per "
                "submap");

@@ -114,6 +114,8 @@ ResumeCheckpoint MakeCheckpoint(const SubmapBuilder& builder, const std::vector<
                        : builder.open_submap_first_frame().value_or(completed[i].last_frame + 1);
   c.focal = builder.focal();
   c.focal_held = builder.stats().focal_held;
+  c.k1 = builder.k1();
+  c.k1_held = builder.stats().k1_held;
   c.input = report.input;
   c.processing_width = report.processing_width;
   c.processing_height = report.processing_height;
@@ -153,10 +155,12 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
       options.resume ? UsableCheckpoint(out_dir, report) : std::nullopt;
   if (resume) {
     intrinsics.fx = intrinsics.fy = resume->focal;
+    intrinsics.k1 = resume->k1;
+    if (intrinsics.k1 != 0) intrinsics.model = "radial";
     report.resumed_from_frame = resume->resume_frame;
     source->SeekTo(resume->resume_frame);
-    GLAM_LOG_INFO("resuming {} at frame {} with submap {} (focal {:.1f} px)", report.input,
-                  resume->resume_frame, resume->next_submap_id, resume->focal);
+    GLAM_LOG_INFO("resuming {} at frame {} with submap {} (focal {:.1f} px, k1 {:.4f})", report.input,
+                  resume->resume_frame, resume->next_submap_id, resume->focal, resume->k1);
   } else {
     ClearPreviousRun(out_dir);
   }
@@ -169,7 +173,7 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
                 report.frames_total, intrinsics.fx);
 
   SubmapBuilder builder(intrinsics, options.submap, cancel);
-  if (resume) builder.ResumeAt(resume->next_submap_id, resume->focal_held);
+  if (resume) builder.ResumeAt(resume->next_submap_id, resume->focal_held, resume->k1_held);
   SubmapAligner aligner(vocabulary, options.alignment, submaps_root, cancel);
   // Each published revision aligned at most one submap, so the interrupted run never got past
   // revision next_submap_id: continuing after it keeps revisions growing for the job's readers.
@@ -332,6 +336,10 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   report.free_focal_rms_gain = stats.free_focal_rms_gain;
   report.focal_held = stats.focal_held;
   report.focal_profile_rms_increase = stats.focal_profile_rms_increase;
+  report.k1 = builder.k1();
+  report.k1_estimated = options.submap.bundle_adjustment.refine_k1 && !stats.k1_held;
+  report.k1_held = stats.k1_held;
+  report.k1_profile_rms_increase = stats.k1_profile_rms_increase;
   report.input_ended_early = source->ended_early();
   report.timings.decode_and_features_s = worker.busy_seconds();
   report.timings.builder_s = builder_seconds;

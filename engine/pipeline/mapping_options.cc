@@ -46,6 +46,7 @@ void UsePaperMethod(MappingOptions* options) {
   submap.isolated_filter_once = false;
   submap.bootstrap_rotation_veto_fraction = 0;
   submap.focal_profile_step = 0;
+  submap.bundle_adjustment.refine_k1 = false;
   options->alignment.use_shared_frames = false;
   options->alignment.local_window = 0;
 }

@@ -63,6 +63,13 @@ struct MappingReport {
   // rms increase, when it was measured.
   bool focal_held = false;
   std::optional<double> focal_profile_rms_increase;
+  // Radial distortion: the estimate (BundleAdjustmentOptions::refine_k1) or the given value;
+  // whether it is an estimate; SubmapOptions::k1_profile_min_rms_increase's measure (unset when
+  // not checked) and whether k1 was therefore held at its initial value.
+  double k1 = 0;
+  bool k1_estimated = false;
+  std::optional<double> k1_profile_rms_increase;
+  bool k1_held = false;
   double fps = 0;            // input frame rate
   double processing_fps = 0; // frames decoded / total time
   int processing_width = 0;

@@ -16,6 +16,8 @@ void WriteCheckpoint(const std::filesystem::path& out_dir, const ResumeCheckpoin
                                {"resume_frame", c.resume_frame},
                                {"focal_px", c.focal},
                                {"focal_held", c.focal_held},
+                               {"k1", c.k1},
+                               {"k1_held", c.k1_held},
                                {"input", c.input},
                                {"processing_size", {c.processing_width, c.processing_height}},
                                {"run_id", c.run_id}};
@@ -33,6 +35,8 @@ std::optional<ResumeCheckpoint> ReadCheckpoint(const std::filesystem::path& out_
     c.resume_frame = json.at("resume_frame").get<std::int64_t>();
     c.focal = json.at("focal_px").get<double>();
     c.focal_held = json.value("focal_held", false);  // absent in checkpoints written before it existed
+    c.k1 = json.value("k1", 0.0);  // likewise
+    c.k1_held = json.value("k1_held", false);
     c.input = json.at("input").get<std::string>();
     c.processing_width = json.at("processing_size").at(0).get<int>();
     c.processing_height = json.at("processing_size").at(1).get<int>();

@@ -20,6 +20,10 @@ struct ResumeCheckpoint {
   // The focal was held at its initial value (SubmapOptions::focal_profile_step): the resumed
   // run keeps it fixed too, so the submaps before and after agree on it.
   bool focal_held = false;
+  // Radial distortion estimate so far (the given k1 when it is not estimated), and whether it
+  // was held at the initial value (SubmapOptions::k1_profile_min_rms_increase): kept so.
+  double k1 = 0;
+  bool k1_held = false;
   // What the checkpoint belongs to: a different input or processing size cannot resume.
   std::string input;
   int processing_width = 0;

@@ -24,6 +24,16 @@ struct FocalPriorCost {
   double prior, weight;
 };
 
+struct K1PriorCost {
+  K1PriorCost(double prior, double weight) : prior(prior), weight(weight) {}
+  template <typename T>
+  bool operator()(const T* k1, T* residual) const {
+    residual[0] = T(weight) * (k1[0] - T(prior));
+    return true;
+  }
+  double prior, weight;
+};
+
 class CancelCallback : public ceres::IterationCallback {
  public:
   explicit CancelCallback(const CancellationToken& cancel) : cancel_(cancel) {}
@@ -62,6 +72,7 @@ void BundleAdjustmentOptions::Check() const {
   CheckGreater("BundleAdjustmentOptions.huber_pixels", huber_pixels, 0.0);
   CheckGreaterEqual("BundleAdjustmentOptions.focal_prior_weight", focal_prior_weight, 0.0);
   CheckGreaterEqual("BundleAdjustmentOptions.focal_prior_px", focal_prior_px, 0.0);
+  CheckGreaterEqual("BundleAdjustmentOptions.k1_prior_weight", k1_prior_weight, 0.0);
   CheckGreaterEqual("BundleAdjustmentOptions.fixed_keyframes", fixed_keyframes, 1);
   CheckGreater("BundleAdjustmentOptions.num_threads", num_threads, 0);
 }
@@ -85,8 +96,10 @@ BundleAdjustmentSummary BundleAdjust(const Intrinsics& intrinsics, std::vector<K
   options.Check();
   const auto start = std::chrono::steady_clock::now();
   BundleAdjustmentSummary summary;
+  summary.k1 = intrinsics.k1;
   summary.initial_rms_pixels = RmsReprojection(intrinsics, keyframes, landmarks);
   if (landmarks.empty()) return summary;
+  double k1 = intrinsics.k1;
 
   std::vector<PoseBlock> poses(keyframes.size());
   for (std::size_t k = 0; k < keyframes.size(); ++k) {
@@ -114,8 +127,8 @@ BundleAdjustmentSummary BundleAdjust(const Intrinsics& intrinsics, std::vector<K
     for (const Observation& obs : lm.observations) {
       auto* cost = new ReprojectionCostFunction(obs.pixel.cast<double>(), intrinsics);
       PoseBlock& pose = poses[obs.keyframe];
-      problem.AddResidualBlock(cost, loss, pose.cam_from_submap,
-                               share ? &shared_focal : &pose.focal, lm.point_in_submap.data());
+      problem.AddResidualBlock(cost, loss, pose.cam_from_submap, share ? &shared_focal : &pose.focal,
+                               &k1, lm.point_in_submap.data());
       keyframe_used[obs.keyframe] = true;
     }
   }
@@ -153,6 +166,16 @@ BundleAdjustmentSummary BundleAdjust(const Intrinsics& intrinsics, std::vector<K
                              nullptr, &shared_focal);
   }
 
+  if (problem.HasParameterBlock(&k1)) {
+    if (options.refine_k1) {
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<K1PriorCost, 1, 1>(
+                                   new K1PriorCost(intrinsics.k1, options.k1_prior_weight)),
+                               nullptr, &k1);
+    } else {
+      problem.SetParameterBlockConstant(&k1);
+    }
+  }
+
   ceres::Solver::Options solver_options;
   solver_options.linear_solver_type = ceres::SPARSE_SCHUR;
   solver_options.max_num_iterations = options.max_iterations;
@@ -171,13 +194,18 @@ BundleAdjustmentSummary BundleAdjust(const Intrinsics& intrinsics, std::vector<K
         SE3(SO3(Eigen::Quaterniond(x[3], x[0], x[1], x[2])), Eigen::Vector3d(x[4], x[5], x[6]));
     keyframes[k].focal = share ? shared_focal : pose.focal;
   }
-  summary.final_rms_pixels = RmsReprojection(intrinsics, keyframes, landmarks);
+  Intrinsics refined = intrinsics;
+  refined.k1 = k1;
+  if (k1 != 0) refined.model = "radial";
+  summary.k1 = k1;
+  summary.final_rms_pixels = RmsReprojection(refined, keyframes, landmarks);
   summary.iterations = static_cast<int>(ceres_summary.iterations.size());
   summary.converged = ceres_summary.termination_type == ceres::CONVERGENCE;
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  GLAM_LOG_DEBUG("BA: {} keyframes, {} landmarks, rms {:.3f} -> {:.3f} px in {} iterations ({:.3f} s)",
+  GLAM_LOG_DEBUG("BA: {} keyframes, {} landmarks, rms {:.3f} -> {:.3f} px in {} iterations ({:.3f} s), "
+                 "k1 {:.4f}",
                  keyframes.size(), landmarks.size(), summary.initial_rms_pixels,
-                 summary.final_rms_pixels, summary.iterations, summary.seconds);
+                 summary.final_rms_pixels, summary.iterations, summary.seconds, k1);
   return summary;
 }
 

@@ -39,6 +39,14 @@ struct BundleAdjustmentOptions {
   // ground, which on low relief and slow parallax walks the estimate away (measured: a 640x360
   // oblique loop at 100 m over 15 m relief, started 10 % long, drifted to +38 % per keyframe).
   bool share_focal = true;
+  // One first radial distortion coefficient for all keyframes (COLMAP's SIMPLE_RADIAL model,
+  // k2 stays the camera's), starting at intrinsics.k1 and held near it by the weak prior
+  // k1_prior_weight * (k1 - intrinsics.k1): a change of 0.01 (1.6 px at the corner of a 60-deg
+  // 640x360 frame) costs as much as 0.1 px of reprojection error. Why: consumer drone lenses
+  // are rarely distortion-free, and an unmodelled k1 bends every submap (measured: k1 = -0.15
+  // mapped as pinhole, ATE 1.7 m against 0.07 m with it known). Off for calibrated cameras.
+  bool refine_k1 = true;
+  double k1_prior_weight = 10.0;
   // Keyframes with index < fixed_keyframes keep their pose (gauge, or frozen history).
   int fixed_keyframes = 1;
   bool fix_scale = true;
@@ -53,11 +61,14 @@ struct BundleAdjustmentSummary {
   int iterations = 0;
   bool converged = false;
   double seconds = 0;
+  // The k1 the adjustment ended with (intrinsics.k1 unless refine_k1).
+  double k1 = 0;
 };
 
 // Refines keyframes[*].cam_from_submap, keyframes[*].focal and landmarks[*].point_in_submap
-// in place. Landmark observations index keyframes. `intrinsics` supplies cx, cy, k1, k2 and
-// the aspect ratio fy / fx (kept fixed); each keyframe's focal is its fx. Throws Cancelled.
+// in place, and k1 (returned in the summary). Landmark observations index keyframes.
+// `intrinsics` supplies cx, cy, k2 and the aspect ratio fy / fx (kept fixed) and the initial
+// k1; each keyframe's focal is its fx. Throws Cancelled.
 BundleAdjustmentSummary BundleAdjust(const Intrinsics& intrinsics, std::vector<Keyframe>& keyframes,
                                      std::vector<Landmark>& landmarks,
                                      const BundleAdjustmentOptions& options,

@@ -215,13 +215,19 @@ std::size_t SubmapBuilder::TriangulateBetween(std::size_t first_position, std::s
 }
 
 void SubmapBuilder::OptimiseAndFilter() {
-  const Camera camera = CurrentCamera();
   BundleAdjustmentOptions ba = options_.bundle_adjustment;
   ba.focal_prior_px = focal_;  // the running median (see BundleAdjustmentOptions)
-  ba.focal_prior_weight *= 1.0 + options_.focal_prior_growth * static_cast<double>(completed_keyframe_focals_.size());
-  const auto summary = BundleAdjust(camera.intrinsics(), open_.keyframes, open_.landmarks, ba, cancel_);
+  // What completed submaps agreed on weighs more with every keyframe they had (k1 likewise;
+  // its prior is centred on the running estimate k1_).
+  const double prior_growth =
+      1.0 + options_.focal_prior_growth * static_cast<double>(completed_keyframe_focals_.size());
+  ba.focal_prior_weight *= prior_growth;
+  ba.k1_prior_weight *= prior_growth;
+  const auto summary = BundleAdjust(CurrentCamera().intrinsics(), open_.keyframes, open_.landmarks, ba, cancel_);
   stats_.bundle_adjust_seconds += summary.seconds;
-  RemoveReprojectionOutliers(camera.intrinsics(), open_.keyframes, open_.landmarks, options_.outlier_filter);
+  k1_ = summary.k1;
+  RemoveReprojectionOutliers(CurrentCamera().intrinsics(), open_.keyframes, open_.landmarks,
+                             options_.outlier_filter);
   // Each landmark meets filter 2 once, at the first adjustment after it was triangulated
   // (SubmapOptions::isolated_filter_once); the statistic still covers all landmarks.
   RemoveIsolatedLandmarks(open_.landmarks, options_.outlier_filter,

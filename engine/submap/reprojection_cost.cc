@@ -10,14 +10,14 @@ namespace glam {
 
 ReprojectionCostFunction::ReprojectionCostFunction(const Eigen::Vector2d& observed_pixel,
                                                    const Intrinsics& intrinsics)
-    : observed_(observed_pixel), cx_(intrinsics.cx), cy_(intrinsics.cy), k1_(intrinsics.k1),
-      k2_(intrinsics.k2), aspect_(intrinsics.fy / intrinsics.fx) {}
+    : observed_(observed_pixel), cx_(intrinsics.cx), cy_(intrinsics.cy), k2_(intrinsics.k2), aspect_(intrinsics.fy / intrinsics.fx) {}
 
 bool ReprojectionCostFunction::Evaluate(double const* const* parameters, double* residuals,
                                         double** jacobians) const {
   const double* pose = parameters[0];
   const double focal = parameters[1][0];
-  const Eigen::Map<const Eigen::Vector3d> x(parameters[2]);
+  const double k1 = parameters[2][0];
+  const Eigen::Map<const Eigen::Vector3d> x(parameters[3]);
   const double w = pose[3];
   const Eigen::Vector3d v(pose[0], pose[1], pose[2]);
   const Eigen::Map<const Eigen::Vector3d> t(pose + 4);
@@ -30,7 +30,8 @@ bool ReprojectionCostFunction::Evaluate(double const* const* parameters, double*
     if (jacobians != nullptr) {
       if (jacobians[0] != nullptr) Eigen::Map<Eigen::Matrix<double, 2, 7>>(jacobians[0]).setZero();
       if (jacobians[1] != nullptr) Eigen::Map<Eigen::Matrix<double, 2, 1>>(jacobians[1]).setZero();
-      if (jacobians[2] != nullptr) Eigen::Map<Eigen::Matrix<double, 2, 3>>(jacobians[2]).setZero();
+      if (jacobians[2] != nullptr) Eigen::Map<Eigen::Matrix<double, 2, 1>>(jacobians[2]).setZero();
+      if (jacobians[3] != nullptr) Eigen::Map<Eigen::Matrix<double, 2, 3>>(jacobians[3]).setZero();
     }
     return true;
   }
@@ -38,7 +39,7 @@ bool ReprojectionCostFunction::Evaluate(double const* const* parameters, double*
   const double xn = p.x() * inv_z;
   const double yn = p.y() * inv_z;
   const double r2 = xn * xn + yn * yn;
-  const double d = 1.0 + k1_ * r2 + k2_ * r2 * r2;
+  const double d = 1.0 + k1 * r2 + k2_ * r2 * r2;
   const double fy = focal * aspect_;
   residuals[0] = focal * d * xn + cx_ - observed_.x();
   residuals[1] = fy * d * yn + cy_ - observed_.y();
@@ -47,7 +48,7 @@ bool ReprojectionCostFunction::Evaluate(double const* const* parameters, double*
   // d residual / d p (2x3), through the normalised coordinates and the distortion factor.
   Eigen::Matrix<double, 2, 3> dn_dp;  // d (xn, yn) / d p
   dn_dp << inv_z, 0, -xn * inv_z, 0, inv_z, -yn * inv_z;
-  const double dd_dr2 = k1_ + 2.0 * k2_ * r2;
+  const double dd_dr2 = k1 + 2.0 * k2_ * r2;
   const Eigen::RowVector3d dd_dp = dd_dr2 * 2.0 * (xn * dn_dp.row(0) + yn * dn_dp.row(1));
   Eigen::Matrix<double, 2, 3> dr_dp;
   dr_dp.row(0) = focal * (d * dn_dp.row(0) + xn * dd_dp);
@@ -69,10 +70,15 @@ bool ReprojectionCostFunction::Evaluate(double const* const* parameters, double*
     jacobians[1][1] = aspect_ * d * yn;
   }
   if (jacobians[2] != nullptr) {
+    // d d / d k1 = r^2.
+    jacobians[2][0] = focal * r2 * xn;
+    jacobians[2][1] = fy * r2 * yn;
+  }
+  if (jacobians[3] != nullptr) {
     // d p / d x = I + 2w [v]x + 2 [v]x^2.
     const Eigen::Matrix3d sv = Hat(v);
     const Eigen::Matrix3d dp_dx = Eigen::Matrix3d::Identity() + 2.0 * w * sv + 2.0 * sv * sv;
-    Eigen::Map<Eigen::Matrix<double, 2, 3, Eigen::RowMajor>> j(jacobians[2]);
+    Eigen::Map<Eigen::Matrix<double, 2, 3, Eigen::RowMajor>> j(jacobians[3]);
     j = dr_dp * dp_dx;
   }
   return true;

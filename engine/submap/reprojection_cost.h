@@ -11,11 +11,13 @@
 //   cam_from_submap  7: Eigen quaternion storage (x, y, z, w), then translation (x, y, z);
 //                       use NewPoseManifold() (quaternion x Euclidean) for it
 //   focal            1: fx in pixels (fy = fx * aspect of the camera)
+//   k1               1: first radial distortion coefficient (shared by all keyframes; held
+//                       constant by the caller when it is not estimated)
 //   point_in_submap  3
 // The rotation is applied as Eigen's quaternion-vector product, which assumes a unit
 // quaternion; the Jacobian is that of the same formula, so it is exact for any quaternion the
-// manifold produces. Principal point and distortion (k1, k2) are constants of the camera:
-// too weakly observed inside one submap to refine.
+// manifold produces. Principal point and k2 are constants of the camera: too weakly observed
+// inside one submap to refine (k1 alone is what COLMAP's SIMPLE_RADIAL model refines too).
 #pragma once
 
 #include <ceres/manifold.h>
@@ -26,12 +28,13 @@
 
 namespace glam {
 
-class ReprojectionCostFunction final : public ceres::SizedCostFunction<2, 7, 1, 3> {
+class ReprojectionCostFunction final : public ceres::SizedCostFunction<2, 7, 1, 1, 3> {
  public:
   // Residual of a point behind (or on) the camera plane, with zero Jacobians: large but finite,
   // so the solver turns back instead of failing.
   static constexpr double kBehindCameraResidual = 1e3;
 
+  // `intrinsics` supplies cx, cy, k2 and the aspect ratio; focal and k1 are parameters.
   ReprojectionCostFunction(const Eigen::Vector2d& observed_pixel, const Intrinsics& intrinsics);
 
   bool Evaluate(double const* const* parameters, double* residuals,
@@ -39,7 +42,7 @@ class ReprojectionCostFunction final : public ceres::SizedCostFunction<2, 7, 1, 
 
  private:
   Eigen::Vector2d observed_;
-  double cx_, cy_, k1_, k2_, aspect_;
+  double cx_, cy_, k2_, aspect_;
 };
 
 // Quaternion (Eigen order) x R^3 for the 7-dimensional pose block. scale_axis = 0, 1 or 2

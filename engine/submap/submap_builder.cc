@@ -1,9 +1,7 @@
 #include "engine/submap/submap_builder.h"
 
 #include <algorithm>
-#include <array>
 #include <iterator>
-#include <limits>
 #include <utility>
 #include <cmath>
 
@@ -16,15 +14,13 @@ namespace {
 // How far (frames) the overlap start may move back to reach a detected frame: more than any
 // automatic detection interval (0.2 s at up to 120 fps).
 constexpr std::size_t kMaxOverlapShift = 30;
-// Iteration cap of each fixed-focal adjustment of the focal profile (run once per job; from the
-// free-focal optimum they converge in 8-25 iterations on the clips measured).
-constexpr int kFocalProfileIterations = 100;
 
 }  // namespace
 
 SubmapBuilder::SubmapBuilder(const Intrinsics& intrinsics, const SubmapOptions& options,
                              CancellationToken cancel)
-    : intrinsics_(intrinsics), options_(options), cancel_(std::move(cancel)), focal_(intrinsics.fx) {
+    : intrinsics_(intrinsics), options_(options), cancel_(std::move(cancel)), focal_(intrinsics.fx),
+      k1_(intrinsics.k1) {
   intrinsics_.Check();
   options_.Check();
 }
@@ -33,13 +29,16 @@ Camera SubmapBuilder::CurrentCamera() const {
   Intrinsics in = intrinsics_;
   in.fy = focal_ * intrinsics_.fy / intrinsics_.fx;
   in.fx = focal_;
+  in.k1 = k1_;
+  if (k1_ != 0) in.model = "radial";
   return Camera(in);
 }
 
-void SubmapBuilder::ResumeAt(std::uint32_t next_submap_id, bool focal_held) {
+void SubmapBuilder::ResumeAt(std::uint32_t next_submap_id, bool focal_held, bool k1_held) {
   GLAM_CHECK(stats_.frames_seen == 0, "ResumeAt after frames were added");
   next_submap_id_ = next_submap_id;
   if (focal_held && options_.bundle_adjustment.refine_focal) HoldInitialFocal();
+  if (k1_held && options_.bundle_adjustment.refine_k1) HoldInitialK1();
 }
 
 std::optional<std::int64_t> SubmapBuilder::open_submap_first_frame() const {
@@ -76,6 +75,7 @@ void SubmapBuilder::StartSubmapAt(std::deque<FrameRecord> frames) {
   open_ = OpenSubmap{};
   open_.frames = std::move(frames);
   open_.start_focal = focal_;
+  open_.start_k1 = k1_;
   for (FrameRecord& f : open_.frames) {
     f.cam_from_submap.reset();
     f.landmark_matches.clear();
@@ -88,7 +88,10 @@ void SubmapBuilder::Process(FrameRecord record, std::vector<Submap>* completed) 
     // subset of a detection frame's keypoints); the frames in between are localised once the
     // bootstrap succeeds.
     const bool detected = record.detected;
-    if (open_.frames.empty()) open_.start_focal = focal_;
+    if (open_.frames.empty()) {
+      open_.start_focal = focal_;
+      open_.start_k1 = k1_;
+    }
     open_.frames.push_back(std::move(record));
     if (detected || open_.frames.size() == 1) TryBootstrap();
     return;
@@ -134,76 +137,8 @@ void SubmapBuilder::Process(FrameRecord record, std::vector<Submap>* completed) 
 
   if ((!extending_tail_ && static_cast<int>(open_.keyframes.size()) >= options_.keyframes_per_submap) ||
       static_cast<int>(open_.frames.size()) >= options_.max_frames_per_submap) {
-    if (!RebuildIfFocalMoved(completed)) HandOffOverlap(completed);
+    if (!RebuildIfCameraMoved(completed)) HandOffOverlap(completed);
   }
-}
-
-bool SubmapBuilder::RebuildIfFocalMoved(std::vector<Submap>* completed) {
-  if (!options_.bundle_adjustment.refine_focal || options_.rebuild_focal_change <= 0 ||
-      open_.rebuilds >= options_.max_submap_rebuilds || open_.start_focal <= 0) {
-    return false;
-  }
-  // Once, and only while no submap has completed: a focal held after one would make the map's
-  // submaps disagree on it (a first submap closed by a tracking loss skips the check).
-  if (!stats_.focal_profile_rms_increase && options_.focal_profile_step > 0 &&
-      completed_keyframe_focals_.empty()) {
-    const double increase = FocalProfileRmsIncrease();
-    stats_.focal_profile_rms_increase = increase;
-    if (increase < options_.focal_profile_min_rms_increase) {
-      // The open submap was adjusted with the focal free: tracked again at the held focal.
-      GLAM_LOG_WARN("the images do not determine the focal length (fixing it {:.0f} % off the estimate "
-                    "{:.1f} px changes the reprojection rms by {:+.3f} %; nadir view of flat ground?): "
-                    "holding the initial {:.1f} px; tracking the open submap's {} frames again",
-                    100.0 * options_.focal_profile_step, focal_, 100.0 * increase, intrinsics_.fx,
-                    open_.frames.size());
-      HoldInitialFocal();
-      ++stats_.submap_rebuilds;
-      RestartWith(std::move(open_.frames), open_.rebuilds + 1, completed);
-      return true;
-    }
-  }
-  const double change = std::abs(focal_ - open_.start_focal) / open_.start_focal;
-  if (change <= options_.rebuild_focal_change) return false;
-  const int rebuilds = open_.rebuilds + 1;
-  ++stats_.submap_rebuilds;
-  GLAM_LOG_INFO("focal estimate moved {:.1f} % ({:.1f} -> {:.1f} px) since frame {}: tracking the "
-                "open submap's {} frames again (rebuild {})",
-                100.0 * change, open_.start_focal, focal_, open_.frames.front().index,
-                open_.frames.size(), rebuilds);
-  // The replay goes through the normal per-frame path, so it may complete this submap (and
-  // even rebuild it again, up to the limit) before the current frame is reached.
-  RestartWith(std::move(open_.frames), rebuilds, completed);
-  return true;
-}
-
-void SubmapBuilder::HoldInitialFocal() {
-  stats_.focal_held = true;
-  options_.bundle_adjustment.refine_focal = false;  // also ends the rebuilds and the profile
-  focal_ = intrinsics_.fx;
-}
-
-double SubmapBuilder::FocalProfileRmsIncrease() {
-  const double step = options_.focal_profile_step;
-  BundleAdjustmentOptions ba = options_.bundle_adjustment;
-  ba.refine_focal = false;
-  ba.max_iterations = kFocalProfileIterations;
-  std::array<double, 3> rms{};
-  const std::array<double, 3> scales{1.0, 1.0 - step, 1.0 + step};
-  for (std::size_t i = 0; i < scales.size(); ++i) {
-    std::vector<Keyframe> keyframes = open_.keyframes;
-    std::vector<Landmark> landmarks = open_.landmarks;
-    for (Keyframe& kf : keyframes) kf.focal = scales[i] * focal_;
-    const auto summary = BundleAdjust(CurrentCamera().intrinsics(), keyframes, landmarks, ba, cancel_);
-    stats_.bundle_adjust_seconds += summary.seconds;
-    rms[i] = summary.final_rms_pixels;
-  }
-  const double increase = rms[0] > 0 ? std::min(rms[1], rms[2]) / rms[0] - 1.0
-                                     : std::numeric_limits<double>::infinity();
-  GLAM_LOG_INFO("focal profile of the first submap ({} keyframes): rms {:.4f} px at {:.1f} px, "
-                "{:+.3f} % at {:.1f} px, {:+.3f} % at {:.1f} px",
-                open_.keyframes.size(), rms[0], focal_, 100.0 * (rms[1] / rms[0] - 1.0), scales[1] * focal_,
-                100.0 * (rms[2] / rms[0] - 1.0), scales[2] * focal_);
-  return increase;
 }
 
 void SubmapBuilder::RestartWith(std::deque<FrameRecord> frames, int rebuilds,
@@ -273,8 +208,11 @@ std::vector<Submap> SubmapBuilder::Finish() {
     }
   }
   // End of input: a submap that never reached its last keyframe still gets the rebuild at the
-  // settled focal (a short clip is often one such submap).
-  if (open_.bootstrapped) RebuildIfFocalMoved(&completed);
+  // settled focal (a short clip is often one such submap), and the first submap the camera
+  // decisions (k1, then focal: after a k1 hold the rebuilt submap gets the focal profile).
+  // Bounded by SubmapOptions::max_submap_rebuilds per submap.
+  while (open_.bootstrapped && RebuildIfCameraMoved(&completed)) {
+  }
   // Then give the open submap its best chance to be kept. A pending bootstrap takes
   // the last frame as second keyframe if the parallax allows; a submap with fewer than three
   // keyframes makes its last tracked frame a keyframe.

@@ -10,8 +10,9 @@
 // starts at the first frame of the last 10 % of this one's frames (replayed from memory), so
 // consecutive submaps share ground. Tracking loss closes the submap at the previous frame and
 // bootstraps a new one at the current frame. When the focal is being estimated and the
-// estimate moved by more than 2 % while a submap was built, the submap is tracked again from
-// its first frame at the new focal before it completes (SubmapOptions::rebuild_focal_change).
+// estimate (or the radial distortion k1's effect at the image corner) moved by more than 2 %
+// while a submap was built, the submap is tracked again from its first frame at the new
+// camera before it completes (SubmapOptions::rebuild_focal_change).
 #pragma once
 
 #include <cstdint>
@@ -36,7 +37,7 @@ struct SubmapBuilderStats {
   std::int64_t submaps_completed = 0;
   std::int64_t submaps_discarded = 0;  // closed with < 3 keyframes
   std::int64_t tracking_losses = 0;
-  std::int64_t submap_rebuilds = 0;  // open submaps tracked again after a focal change
+  std::int64_t submap_rebuilds = 0;  // open submaps tracked again after a focal or k1 change
   double bundle_adjust_seconds = 0;
   // Where the first completed submap's bundle adjustment takes a fixed focal when it is let
   // free (processing pixels; SubmapOptions::check_fixed_focal). Unset while refining anyway.
@@ -49,6 +50,11 @@ struct SubmapBuilderStats {
   // was therefore held at its initial value.
   std::optional<double> focal_profile_rms_increase;
   bool focal_held = false;
+  // SubmapOptions::k1_profile_min_rms_increase: how much higher (relative) the first submap's
+  // reprojection rms is with k1 fixed at its initial value than at the estimate (unset when
+  // not checked), and whether k1 was therefore held at the initial value.
+  std::optional<double> k1_profile_rms_increase;
+  bool k1_held = false;
 };
 
 class SubmapBuilder {
@@ -68,12 +74,16 @@ class SubmapBuilder {
 
   // Running median of all keyframes' refined focal lengths (the paper's focal estimate).
   double focal() const { return focal_; }
+  // Radial distortion estimate (BundleAdjustmentOptions::refine_k1): the latest bundle
+  // adjustment's shared k1; the initial one while it is not refined.
+  double k1() const { return k1_; }
   const SubmapBuilderStats& stats() const { return stats_; }
   // Continue a resumed run: the first submap this builder completes gets `next_submap_id`
   // (ids stay unique in the job's submaps/ folder). `focal_held`: the interrupted run held the
   // focal at its initial value (SubmapOptions::focal_profile_step), so this one keeps the
-  // focal it was constructed with fixed as well. Only before the first AddFrame.
-  void ResumeAt(std::uint32_t next_submap_id, bool focal_held = false);
+  // focal it was constructed with fixed as well; `k1_held` likewise for k1. Only before the
+  // first AddFrame.
+  void ResumeAt(std::uint32_t next_submap_id, bool focal_held = false, bool k1_held = false);
   // Id the next completed submap will get; also the number of submaps emitted so far.
   std::uint32_t next_submap_id() const { return next_submap_id_; }
   // Frame index of the first frame of the open submap (resume point), if any.
@@ -98,6 +108,7 @@ class SubmapBuilder {
     bool bootstrapped = false;
     std::size_t bootstrap_first = 0;  // position of the first keyframe candidate in `frames`
     double start_focal = 0;           // focal estimate when this submap (or its rebuild) started
+    double start_k1 = 0;              // k1 estimate then
     int rebuilds = 0;                 // times this submap was rebuilt (SubmapOptions)
   };
 
@@ -115,10 +126,13 @@ class SubmapBuilder {
   bool TryBootstrap();
   void StartSubmapAt(std::deque<FrameRecord> frames);
   // At completion (and at the end of input): re-tracks the open submap's frames from its first
-  // one at the current focal when the focal estimate moved by more than
-  // SubmapOptions::rebuild_focal_change since the submap started; the replay then goes on as
-  // usual (and completes it). Returns whether it did.
-  bool RebuildIfFocalMoved(std::vector<Submap>* completed);
+  // one at the current camera when the focal estimate, or the k1 estimate's radial scale at
+  // the image corner, moved by more than SubmapOptions::rebuild_focal_change since the submap
+  // started; the replay then goes on as usual (and completes it). Returns whether it did.
+  bool RebuildIfCameraMoved(std::vector<Submap>* completed);
+  // max(|relative focal change|, |k1 change| * r^2 at the image corner) since the open submap
+  // started: both are relative changes of a corner pixel's distance from the centre.
+  double CameraChangeSinceSubmapStart() const;
   // SubmapOptions::focal_profile_step, on the open submap: the smaller relative rms increase
   // of fixing the focal (1 -/+ step) times the estimate instead of at it (each adjusted to
   // convergence on a copy).
@@ -126,6 +140,15 @@ class SubmapBuilder {
   // The focal goes back to the builder's initial one and stays fixed (stats().focal_held); the
   // caller re-tracks the open submap if it was adjusted with another.
   void HoldInitialFocal();
+  // SubmapOptions::k1_profile_min_rms_increase, on the open submap: the relative rms increase
+  // of k1 fixed at its initial value over k1 fixed at the estimate (each adjusted to
+  // convergence on a copy).
+  double K1ProfileRmsIncrease();
+  // k1 goes back to the initial one and stays fixed (stats().k1_held); the caller re-tracks.
+  void HoldInitialK1();
+  // On the job's first submap, once, while k1 is refined: the k1 profile, and HoldInitialK1()
+  // when it says the images do not ask for the estimate. Returns whether it held k1.
+  bool HoldK1IfUndetermined();
   // Starts a new open submap at frames.front() (its `rebuilds` count set) and feeds the other
   // frames, kept in memory, through Process() again, forgetting their earlier poses. Shared by
   // the overlap hand-off and the rebuild.
@@ -171,6 +194,7 @@ class SubmapBuilder {
   SubmapOptions options_;
   CancellationToken cancel_;
   double focal_;
+  double k1_;
   std::vector<double> completed_keyframe_focals_;  // for the running median
   OpenSubmap open_;
   // Frames of the last completed submap from its middle keyframe to the overlap start, kept

@@ -71,7 +71,8 @@ std::vector<bool> SubmapBuilder::RefineWithTrackedFrames() {
     }
   }
   BundleAdjustmentOptions ba = options_.bundle_adjustment;
-  ba.refine_focal = false;  // focal estimation is the incremental BAs' job
+  ba.refine_focal = false;  // focal and k1 estimation are the incremental BAs' job
+  ba.refine_k1 = false;
   const auto summary = BundleAdjust(CurrentCamera().intrinsics(), views, landmarks, ba, cancel_);
   stats_.bundle_adjust_seconds += summary.seconds;
   for (std::size_t k = 0; k < open_.keyframes.size(); ++k) {
@@ -134,6 +135,7 @@ void SubmapBuilder::CheckFixedFocal() {
   std::vector<Landmark> landmarks = open_.landmarks;
   BundleAdjustmentOptions ba = options_.bundle_adjustment;
   ba.max_iterations = kFixedFocalCheckIterations;
+  ba.refine_k1 = false;  // the focal's question alone
   // First to convergence with the focal still fixed: the completed submap is not at the
   // keyframes-only optimum (its last adjustment included tracked frames, and filters removed
   // points since), and a free focal started off that optimum wanders along the flat
@@ -171,6 +173,9 @@ Submap SubmapBuilder::Complete() {
   }
   RelocaliseFrames(refined);
   CheckFixedFocal();
+  // A first submap closed without the camera decisions (by a tracking loss, or out of rebuilds)
+  // still decides on k1, for the submaps after it; it keeps the k1 it was built with.
+  HoldK1IfUndetermined();
 
   Submap submap;
   submap.id = next_submap_id_++;

@@ -42,6 +42,7 @@ void SubmapOptions::Check() const {
   CheckGreaterEqual("SubmapOptions.focal_prior_growth", focal_prior_growth, 0.0);
   CheckInRange("SubmapOptions.focal_profile_step", focal_profile_step, 0.0, 0.5);
   CheckInRange("SubmapOptions.focal_profile_min_rms_increase", focal_profile_min_rms_increase, 0.0, 0.1);
+  CheckInRange("SubmapOptions.k1_profile_min_rms_increase", k1_profile_min_rms_increase, 0.0, 0.5);
   CheckInRange("SubmapOptions.short_final_submap_fraction", short_final_submap_fraction, 0.0, 1.0);
   if (max_keyframe_parallax_deg > 0 && max_keyframe_parallax_deg < 2.0 * min_triangulation_angle_deg) {
     throw InputError("SubmapOptions.max_keyframe_parallax_deg must be 0 or at least twice "

@@ -43,6 +43,7 @@ MappingOptions LoopOptions() {
   MappingOptions options;
   options.intrinsics = ReadIntrinsicsJson(kClip / "intrinsics.json");
   options.submap.bundle_adjustment.refine_focal = false;
+  options.submap.bundle_adjustment.refine_k1 = false;
   options.submap.keyframes_per_submap = 10;  // several submaps on a 30 s clip
   return options;
 }

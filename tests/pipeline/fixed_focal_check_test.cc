@@ -37,6 +37,7 @@ MappingReport MapWithFocalFactor(double factor, const std::string& name, const f
   in.fy *= factor;
   options.intrinsics = in;
   options.submap.bundle_adjustment.refine_focal = false;  // what --intrinsics means
+  options.submap.bundle_adjustment.refine_k1 = false;
   const fs::path out = fs::temp_directory_path() / ("glam_fixed_focal_check_" + name);
   fs::remove_all(out);
   return RunMapping(clip / "video.mp4", out, options);

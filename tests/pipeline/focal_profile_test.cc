@@ -62,6 +62,12 @@ TEST(FocalProfile, AnUndeterminedFocalIsHeldAtItsInitialValue) {
   EXPECT_EQ(held.report.warnings.size(), 1u);  // not also the fixed-focal check's warning
   EXPECT_FALSE(held.report.free_focal_original.has_value());
   EXPECT_EQ(held.report.ToJson().at("focal_held"), true);
+  // A distortion-free lens: k1 was estimated, found not to matter and held at 0 (measured
+  // profile -0.002 %).
+  ASSERT_TRUE(held.report.k1_profile_rms_increase.has_value());
+  EXPECT_LT(*held.report.k1_profile_rms_increase, MappingOptions().submap.k1_profile_min_rms_increase);
+  EXPECT_TRUE(held.report.k1_held);
+  EXPECT_EQ(held.report.k1, 0.0);
   ASSERT_TRUE(held.result.map.has_value());
   // Measured: ATE 0.14 m, every frame posed. The map's heights are off by the guess's error
   // (512 px for 554.3 px: -7.6 % of the 40 m altitude, 3.0 m median).
@@ -94,6 +100,7 @@ TEST(FocalProfile, AHeldFocalStaysHeldWhenTheRunIsResumed) {
   const std::optional<ResumeCheckpoint> checkpoint = ReadCheckpoint(out);
   ASSERT_TRUE(checkpoint.has_value());
   EXPECT_TRUE(checkpoint->focal_held);
+  EXPECT_TRUE(checkpoint->k1_held);
 
   MappingOptions resume;
   resume.resume = true;
@@ -102,6 +109,8 @@ TEST(FocalProfile, AHeldFocalStaysHeldWhenTheRunIsResumed) {
   EXPECT_TRUE(report.focal_held);
   EXPECT_NEAR(report.focal, checkpoint->focal, 1e-9);  // not refined after the resume
   EXPECT_NEAR(report.focal, report.initial_focal, 1e-9);
+  EXPECT_TRUE(report.k1_held);  // and k1 stays 0
+  EXPECT_EQ(report.k1, 0.0);
   EXPECT_TRUE(HasHeldWarning(report));
   EXPECT_FALSE(report.free_focal_original.has_value());  // no fixed-focal check either
   fs::remove_all(out);
@@ -136,6 +145,12 @@ TEST(FocalProfile, ADeterminedFocalIsStillEstimated) {
   EXPECT_FALSE(HasHeldWarning(run.report));
   EXPECT_LT(std::abs(run.report.focal / truth - 1.0), 0.03) << run.report.focal;
   EXPECT_LT(run.result.trajectory.ate_rmse, 0.2);
+  // Distortion-free lens: k1 held at 0 (measured profile +0.03 % for k1 = -0.016), after which
+  // the rebuilt submap still gets the focal profile above.
+  ASSERT_TRUE(run.report.k1_profile_rms_increase.has_value());
+  EXPECT_LT(*run.report.k1_profile_rms_increase, MappingOptions().submap.k1_profile_min_rms_increase);
+  EXPECT_TRUE(run.report.k1_held);
+  EXPECT_EQ(run.report.k1, 0.0);
 }
 
 TEST(FocalProfile, HeldFocalIsReportedAsAWarning) {

@@ -35,6 +35,7 @@ MappingOptions DemoOptions() {
   MappingOptions options;
   options.intrinsics = ReadIntrinsicsJson(kClip / "intrinsics.json");
   options.submap.bundle_adjustment.refine_focal = false;
+  options.submap.bundle_adjustment.refine_k1 = false;
   options.submap.keyframes_per_submap = 6;
   return options;
 }

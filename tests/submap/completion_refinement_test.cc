@@ -53,6 +53,7 @@ TEST(CompletionRefinement, TrackedFramesInTheFinalBundleAdjustmentImproveTheSubm
   SubmapOptions options;
   options.keyframes_per_submap = 6;
   options.bundle_adjustment.refine_focal = false;
+  options.bundle_adjustment.refine_k1 = false;
   ASSERT_GT(options.completion_ba_max_frames, 0) << "the product default uses the completion BA";
   const Accuracy refined = Measure(test_support::RunSubmapBuilderOnClip(clip.video, clip.intrinsics, options, 0),
                                    clip.gt_world_from_cam, clip.surface);

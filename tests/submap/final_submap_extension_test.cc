@@ -24,6 +24,7 @@ TEST(FinalSubmapExtension, ExtendsOnlyAShortFinalSubmapAndThatMakesItsMapBetter)
   SubmapOptions options;
   options.keyframes_per_submap = 6;
   options.bundle_adjustment.refine_focal = false;
+  options.bundle_adjustment.refine_k1 = false;
   ASSERT_TRUE(options.extend_short_final_submap);
   ASSERT_DOUBLE_EQ(options.short_final_submap_fraction, 0.75);
   const test_support::ClipRun extended = test_support::RunSubmapBuilderOnClip(clip.video, clip.intrinsics, options, 0);

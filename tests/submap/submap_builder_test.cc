@@ -50,6 +50,7 @@ class SubmapBuilderOnSyntheticClip : public ::testing::Test {
     options.keyframes_per_submap = 6;
     // Calibrated intrinsics are given (as `glam map --intrinsics` does): focal stays fixed.
     options.bundle_adjustment.refine_focal = false;
+    options.bundle_adjustment.refine_k1 = false;
     SiftOptions sift;
     if (S::paper) {
       options.max_keyframe_parallax_deg = 0;

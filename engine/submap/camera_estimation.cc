@@ -1,0 +1,149 @@
+// SubmapBuilder: self-calibration decisions (focal length and radial distortion) taken on the
+// first submap, and the rebuild of an open submap whose camera estimate moved while it was
+// built. Split from submap_builder.cc: these decide *which* camera the map is built with;
+// that file feeds frames through it.
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+
+#include "engine/core/logging.h"
+#include "engine/submap/submap_builder.h"
+
+namespace glam {
+namespace {
+
+// Iteration cap of each adjustment of the focal profile and the k1 test (run once per job;
+// from the free optimum they converge in 8-25 iterations on the clips measured).
+constexpr int kCameraTestIterations = 100;
+
+}  // namespace
+
+double SubmapBuilder::CameraChangeSinceSubmapStart() const {
+  const double half_diagonal = 0.5 * std::hypot(intrinsics_.width, intrinsics_.height);
+  const double corner_r2 = half_diagonal * half_diagonal / (focal_ * focal_);
+  return std::max(std::abs(focal_ - open_.start_focal) / open_.start_focal,
+                  std::abs(k1_ - open_.start_k1) * corner_r2);
+}
+
+bool SubmapBuilder::RebuildIfCameraMoved(std::vector<Submap>* completed) {
+  if (open_.rebuilds >= options_.max_submap_rebuilds || open_.start_focal <= 0) return false;
+  // The decisions on the camera model are taken once, on the job's first submap: one taken
+  // after a submap was emitted would make the map's submaps disagree on the camera (a first
+  // submap closed by a tracking loss skips them, and so does a resumed run, which continues
+  // with the decisions of the interrupted one).
+  const bool first_submap = next_submap_id_ == 0;
+  const BundleAdjustmentOptions& ba = options_.bundle_adjustment;
+  if (!(ba.refine_focal || ba.refine_k1) || options_.rebuild_focal_change <= 0) return false;
+  if (HoldK1IfUndetermined()) {
+    // The open submap was adjusted with k1 free: tracked again at the held k1.
+    ++stats_.submap_rebuilds;
+    RestartWith(std::move(open_.frames), open_.rebuilds + 1, completed);
+    return true;
+  }
+  if (first_submap && ba.refine_focal && !stats_.focal_profile_rms_increase &&
+      options_.focal_profile_step > 0) {
+    const double increase = FocalProfileRmsIncrease();
+    stats_.focal_profile_rms_increase = increase;
+    if (increase < options_.focal_profile_min_rms_increase) {
+      // The open submap was adjusted with the focal free: tracked again at the held focal.
+      GLAM_LOG_WARN("the images do not determine the focal length (fixing it {:.0f} % off the estimate "
+                    "{:.1f} px changes the reprojection rms by {:+.3f} %; nadir view of flat ground?): "
+                    "holding the initial {:.1f} px; tracking the open submap's {} frames again",
+                    100.0 * options_.focal_profile_step, focal_, 100.0 * increase, intrinsics_.fx,
+                    open_.frames.size());
+      HoldInitialFocal();
+      ++stats_.submap_rebuilds;
+      RestartWith(std::move(open_.frames), open_.rebuilds + 1, completed);
+      return true;
+    }
+  }
+  const double change = CameraChangeSinceSubmapStart();
+  if (change <= options_.rebuild_focal_change) return false;
+  const int rebuilds = open_.rebuilds + 1;
+  ++stats_.submap_rebuilds;
+  GLAM_LOG_INFO("camera estimate moved {:.1f} % at the image corner (focal {:.1f} -> {:.1f} px, k1 "
+                "{:.4f} -> {:.4f}) since frame {}: tracking the open submap's {} frames again "
+                "(rebuild {})",
+                100.0 * change, open_.start_focal, focal_, open_.start_k1, k1_,
+                open_.frames.front().index, open_.frames.size(), rebuilds);
+  // The replay goes through the normal per-frame path, so it may complete this submap (and
+  // even rebuild it again, up to the limit) before the current frame is reached.
+  RestartWith(std::move(open_.frames), rebuilds, completed);
+  return true;
+}
+
+void SubmapBuilder::HoldInitialFocal() {
+  stats_.focal_held = true;
+  options_.bundle_adjustment.refine_focal = false;  // also ends the profile (and focal rebuilds)
+  focal_ = intrinsics_.fx;
+}
+
+double SubmapBuilder::FocalProfileRmsIncrease() {
+  const double step = options_.focal_profile_step;
+  BundleAdjustmentOptions ba = options_.bundle_adjustment;
+  ba.refine_focal = false;
+  ba.max_iterations = kCameraTestIterations;
+  std::array<double, 3> rms{};
+  const std::array<double, 3> scales{1.0, 1.0 - step, 1.0 + step};
+  for (std::size_t i = 0; i < scales.size(); ++i) {
+    std::vector<Keyframe> keyframes = open_.keyframes;
+    std::vector<Landmark> landmarks = open_.landmarks;
+    for (Keyframe& kf : keyframes) kf.focal = scales[i] * focal_;
+    const auto summary = BundleAdjust(CurrentCamera().intrinsics(), keyframes, landmarks, ba, cancel_);
+    stats_.bundle_adjust_seconds += summary.seconds;
+    rms[i] = summary.final_rms_pixels;
+  }
+  const double increase = rms[0] > 0 ? std::min(rms[1], rms[2]) / rms[0] - 1.0
+                                     : std::numeric_limits<double>::infinity();
+  GLAM_LOG_INFO("focal profile of the first submap ({} keyframes): rms {:.4f} px at {:.1f} px, "
+                "{:+.3f} % at {:.1f} px, {:+.3f} % at {:.1f} px",
+                open_.keyframes.size(), rms[0], focal_, 100.0 * (rms[1] / rms[0] - 1.0), scales[1] * focal_,
+                100.0 * (rms[2] / rms[0] - 1.0), scales[2] * focal_);
+  return increase;
+}
+
+bool SubmapBuilder::HoldK1IfUndetermined() {
+  if (next_submap_id_ != 0 || !options_.bundle_adjustment.refine_k1 || stats_.k1_profile_rms_increase ||
+      options_.k1_profile_min_rms_increase <= 0) {
+    return false;
+  }
+  const double increase = K1ProfileRmsIncrease();
+  stats_.k1_profile_rms_increase = increase;
+  if (increase >= options_.k1_profile_min_rms_increase) return false;
+  GLAM_LOG_INFO("radial distortion: k1 = {:.4f} fits the first submap hardly better than the initial "
+                "{:.4f} ({:+.3f} % rms): taking the lens as the initial one",
+                k1_, intrinsics_.k1, 100.0 * increase);
+  HoldInitialK1();
+  return true;
+}
+
+void SubmapBuilder::HoldInitialK1() {
+  stats_.k1_held = true;
+  options_.bundle_adjustment.refine_k1 = false;
+  k1_ = intrinsics_.k1;
+}
+
+double SubmapBuilder::K1ProfileRmsIncrease() {
+  BundleAdjustmentOptions ba = options_.bundle_adjustment;
+  ba.refine_k1 = false;
+  ba.max_iterations = kCameraTestIterations;
+  std::array<double, 2> rms{};
+  const std::array<double, 2> k1s{k1_, intrinsics_.k1};
+  for (std::size_t i = 0; i < k1s.size(); ++i) {
+    std::vector<Keyframe> keyframes = open_.keyframes;
+    std::vector<Landmark> landmarks = open_.landmarks;
+    Intrinsics camera = CurrentCamera().intrinsics();
+    camera.k1 = k1s[i];
+    const auto summary = BundleAdjust(camera, keyframes, landmarks, ba, cancel_);
+    stats_.bundle_adjust_seconds += summary.seconds;
+    rms[i] = summary.final_rms_pixels;
+  }
+  const double increase = rms[0] > 0 ? rms[1] / rms[0] - 1.0 : std::numeric_limits<double>::infinity();
+  GLAM_LOG_INFO("k1 profile of the first submap ({} keyframes): rms {:.4f} px at k1 {:+.4f}, {:+.3f} % at "
+                "the initial {:+.4f}",
+                open_.keyframes.size(), rms[0], k1s[0], 100.0 * increase, k1s[1]);
+  return increase;
+}
+
+}  // namespace glam
