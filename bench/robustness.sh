@@ -2,8 +2,8 @@
 # Robustness over flights and cameras the tests do not use (docs/benchmarks.md, "Robustness
 # over flights and cameras").
 #
-# Renders twelve synthetic 600-frame clips at 640x360 with `glam synth` (skipped when already
-# rendered; seeds 41-52, used by no test), each changing one thing from the lawnmower at
+# Renders fourteen synthetic 600-frame clips at 640x360 with `glam synth` (skipped when already
+# rendered; seeds 41-52, 54, 55, used by no test), each changing one thing from the lawnmower at
 # 100 m: speed, altitude, lens, distortion, trajectory, terrain, compression, pitch, frame
 # rate; and derives five more from the lawnmower clip with ffmpeg filters (an on-screen
 # display, exposure flicker, defocus, motion blur, a 3 s freeze of the stream). Maps each one as a user without a calibration would (`glam map`, no intrinsics: the
@@ -28,6 +28,8 @@ declare -A CLIP=(
   [wide_lens]="--trajectory loop --focal 320 --seed 44"
   [narrow_lens]="--trajectory lawnmower --focal 900 --altitude 80 --seed 45"
   [distorted]="--trajectory lawnmower --k1 -0.15 --k2 0.02 --seed 46"
+  [barrel_mild]="--trajectory lawnmower --k1 -0.07 --seed 54"
+  [pincushion]="--trajectory loop --k1 0.06 --seed 55"
   [orbit]="--trajectory orbit --pitch-deg 40 --altitude 50 --seed 47"
   [flat]="--trajectory lawnmower --relief 0 --building-density 0 --seed 48"
   [crf32]="--trajectory loop --crf 32 --seed 49"
@@ -35,7 +37,7 @@ declare -A CLIP=(
   [high]="--trajectory lawnmower --altitude 200 --speed 15 --seed 51"
   [fps24]="--trajectory loop --fps 24 --wobble-deg 4 --seed 52"
 )
-ORDER="lawnmower fast low wide_lens narrow_lens distorted orbit flat crf32 pitch60 high fps24"
+ORDER="lawnmower fast low wide_lens narrow_lens distorted barrel_mild pincushion orbit flat crf32 pitch60 high fps24"
 # Derived from the lawnmower clip by an ffmpeg filter (Debian's ffmpeg, re-encoded at CRF 16);
 # the ground truth is copied, and where the filter changes what a frame shows, adjusted.
 declare -A DERIVED=(
@@ -47,8 +49,8 @@ declare -A DERIVED=(
 )
 DERIVED_ORDER="osd flicker defocus motion_blur freeze"
 
-printf "| clip | synth arguments (or derivation) | run | focal (truth) | held | submaps | posed | ATE | map median |\n"
-printf "|---|---|---|---|---|---|---|---|---|\n"
+printf "| clip | synth arguments (or derivation) | run | focal (truth) | held | k1 (truth) | submaps | posed | ATE | map median |\n"
+printf "|---|---|---|---|---|---|---|---|---|---|\n"
 # derive NAME: WORK/NAME/gt from WORK/lawnmower/gt through DERIVED[NAME] (skipped when done).
 derive() {
   local name=$1 src="$WORK/lawnmower/gt" dst="$WORK/$1/gt"
@@ -103,14 +105,16 @@ for name in $ORDER $DERIVED_ORDER; do
     python3 - "$out" "$WORK/$name/gt" "$name" "$run" "$how" <<'PY'
 import json, sys
 out, gt, name, run, synth = sys.argv[1:6]
-truth = json.load(open(f"{gt}/intrinsics.json"))["fx"]
+intrinsics = json.load(open(f"{gt}/intrinsics.json"))
+truth = intrinsics["fx"]
 r = json.load(open(f"{out}/report.json"))
 e = json.load(open(f"{out}/eval.json"))
 f = r["focal_px"]
 m = e.get("map") or {}
 median = f"{m['median_m']:.2f} m" if "median_m" in m else "-"
 print(f"| {name} | `{synth}` | {run} | {f:.0f} ({truth:.0f}, {100 * (f / truth - 1):+.1f} %) | "
-      f"{'yes' if r.get('focal_held') else 'no'} | {r['submaps']} | "
+      f"{'yes' if r.get('focal_held') else 'no'} | "
+      f"{r.get('k1', 0):+.3f}{' held' if r.get('k1_held') else ''} ({intrinsics.get('k1', 0):+.2f}) | {r['submaps']} | "
       f"{100 * e['trajectory']['fraction_posed']:.0f} % | {e['trajectory']['ate_rmse_m']:.3f} m | {median} |")
 PY
   done
