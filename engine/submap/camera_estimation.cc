@@ -35,8 +35,9 @@ bool SubmapBuilder::RebuildIfCameraMoved(std::vector<Submap>* completed) {
   const bool first_submap = next_submap_id_ == 0;
   const BundleAdjustmentOptions& ba = options_.bundle_adjustment;
   if (!(ba.refine_focal || ba.refine_k1) || options_.rebuild_focal_change <= 0) return false;
-  if (HoldK1IfUndetermined()) {
-    // The open submap was adjusted with k1 free: tracked again at the held k1.
+  if (DecideK1()) {
+    // Held or kept, the submap is tracked again at the decided k1 (and the focal of its
+    // estimate): its landmarks were triangulated while both were moving.
     ++stats_.submap_rebuilds;
     RestartWith(std::move(open_.frames), open_.rebuilds + 1, completed);
     return true;
@@ -103,14 +104,18 @@ double SubmapBuilder::FocalProfileRmsIncrease() {
   return increase;
 }
 
-bool SubmapBuilder::HoldK1IfUndetermined() {
+std::optional<bool> SubmapBuilder::DecideK1() {
   if (next_submap_id_ != 0 || !options_.bundle_adjustment.refine_k1 || stats_.k1_profile_rms_increase ||
       options_.k1_profile_min_rms_increase <= 0) {
-    return false;
+    return std::nullopt;
   }
   const double increase = K1ProfileRmsIncrease();
   stats_.k1_profile_rms_increase = increase;
-  if (increase >= options_.k1_profile_min_rms_increase) return false;
+  if (increase >= options_.k1_profile_min_rms_increase) {
+    GLAM_LOG_INFO("radial distortion: k1 = {:.4f} fits the first submap {:.3f} % better than the initial "
+                  "{:.4f}: estimating it", k1_, 100.0 * increase, intrinsics_.k1);
+    return false;
+  }
   GLAM_LOG_INFO("radial distortion: k1 = {:.4f} fits the first submap hardly better than the initial "
                 "{:.4f} ({:+.3f} % rms): taking the lens as the initial one",
                 k1_, intrinsics_.k1, 100.0 * increase);

@@ -147,8 +147,9 @@ class SubmapBuilder {
   // k1 goes back to the initial one and stays fixed (stats().k1_held); the caller re-tracks.
   void HoldInitialK1();
   // On the job's first submap, once, while k1 is refined: the k1 profile, and HoldInitialK1()
-  // when it says the images do not ask for the estimate. Returns whether it held k1.
-  bool HoldK1IfUndetermined();
+  // when it says the images do not ask for the estimate. Returns whether it held k1, nullopt
+  // when it did not decide (already decided, not the first submap, k1 not refined).
+  std::optional<bool> DecideK1();
   // Starts a new open submap at frames.front() (its `rebuilds` count set) and feeds the other
   // frames, kept in memory, through Process() again, forgetting their earlier poses. Shared by
   // the overlap hand-off and the rebuild.

@@ -175,7 +175,7 @@ Submap SubmapBuilder::Complete() {
   CheckFixedFocal();
   // A first submap closed without the camera decisions (by a tracking loss, or out of rebuilds)
   // still decides on k1, for the submaps after it; it keeps the k1 it was built with.
-  HoldK1IfUndetermined();
+  DecideK1();
 
   Submap submap;
   submap.id = next_submap_id_++;
