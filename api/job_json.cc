@@ -134,11 +134,7 @@ MappingOptions ToMappingOptions(const JobOptions& o) {
   MappingOptions m;
   if (o.stride) m.source.stride = *o.stride;
   if (o.max_image_size) m.source.max_image_size = *o.max_image_size;
-  if (o.intrinsics) {
-    m.intrinsics = *o.intrinsics;
-    // As in `glam map --intrinsics`: a given calibration is trusted.
-    m.submap.bundle_adjustment.refine_focal = false;
-  }
+  if (o.intrinsics) UseCalibration(&m, *o.intrinsics);  // as `glam map --intrinsics`
   if (o.focal) m.focal_px = *o.focal;
   if (o.keyframes_per_submap) m.submap.keyframes_per_submap = *o.keyframes_per_submap;
   if (o.detect_every) m.detection_interval = *o.detect_every;

@@ -81,11 +81,8 @@ void DrawProgress(const MappingProgress& p, bool tty) {
 void RunMap(MapArgs& args) {
   if (args.paper) UsePaperMethod(&args.options);  // the options it sets exclude --paper
   if (!args.intrinsics_path.empty()) {
-    args.options.intrinsics = ReadIntrinsicsJson(args.intrinsics_path);
-    // A calibration is trusted: its focal stays fixed unless asked otherwise (on flat nadir
-    // footage focal length trades off against altitude, so refining it costs accuracy).
-    args.options.submap.bundle_adjustment.refine_focal = args.refine_focal;
-    args.options.submap.bundle_adjustment.refine_k1 = false;  // a calibration's distortion is kept
+    UseCalibration(&args.options, ReadIntrinsicsJson(args.intrinsics_path));
+    args.options.submap.bundle_adjustment.refine_focal = args.refine_focal;  // --refine-focal
   }
   if (args.fixed_k1) args.options.submap.bundle_adjustment.refine_k1 = false;
   if (args.focal != 0) args.options.focal_px = args.focal;

@@ -51,6 +51,12 @@ void UsePaperMethod(MappingOptions* options) {
   options->alignment.local_window = 0;
 }
 
+void UseCalibration(MappingOptions* options, const Intrinsics& intrinsics) {
+  options->intrinsics = intrinsics;
+  options->submap.bundle_adjustment.refine_focal = false;
+  options->submap.bundle_adjustment.refine_k1 = false;
+}
+
 Intrinsics ResolveIntrinsics(const MappingOptions& options, const FrameSourceInfo& info) {
   const double s = info.scale;
   Intrinsics out;

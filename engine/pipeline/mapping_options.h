@@ -77,6 +77,12 @@ inline constexpr double kAutoDetectionSeconds = 0.2;
 // frame: ~5 fps at 1280x720) and on the synthetic test clips it maps less of the ground.
 void UsePaperMethod(MappingOptions* options);
 
+// A calibration is given (`glam map --intrinsics`, job option `intrinsics`): it is trusted, so
+// its focal and distortion stay fixed (on flat nadir footage the focal trades off against
+// altitude and k1 against the ground's curvature, so refining a real calibration costs
+// accuracy; `glam map --refine-focal` turns the focal's refinement back on).
+void UseCalibration(MappingOptions* options, const Intrinsics& intrinsics);
+
 // Intrinsics at processing size for `info`: the given calibration or focal rescaled by
 // info.scale (pixel centres at integer coordinates: c' = (c + 0.5) s - 0.5), or the default
 // guess with the principal point at the image centre. Throws InputError if a given

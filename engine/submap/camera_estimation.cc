@@ -35,7 +35,7 @@ bool SubmapBuilder::RebuildIfCameraMoved(std::vector<Submap>* completed) {
   const bool first_submap = next_submap_id_ == 0;
   const BundleAdjustmentOptions& ba = options_.bundle_adjustment;
   if (!(ba.refine_focal || ba.refine_k1) || options_.rebuild_focal_change <= 0) return false;
-  if (DecideK1()) {
+  if (DecideK1().has_value()) {
     // Held or kept, the submap is tracked again at the decided k1 (and the focal of its
     // estimate): its landmarks were triangulated while both were moving.
     ++stats_.submap_rebuilds;

@@ -26,6 +26,12 @@ TEST(JobJson, ParsesOptionsAndMapsThemToEngineOptions) {
   EXPECT_EQ(ToMappingOptions(JobOptions{}).detection_interval, 0);  // automatic by default
   ASSERT_TRUE(m.intrinsics.has_value());
   EXPECT_DOUBLE_EQ(m.intrinsics->cx, 319.5);
+  // A given calibration is trusted (as `glam map --intrinsics`): neither focal nor k1 refined;
+  // without one both are estimated.
+  EXPECT_FALSE(m.submap.bundle_adjustment.refine_focal);
+  EXPECT_FALSE(m.submap.bundle_adjustment.refine_k1);
+  EXPECT_TRUE(ToMappingOptions(JobOptions{}).submap.bundle_adjustment.refine_focal);
+  EXPECT_TRUE(ToMappingOptions(JobOptions{}).submap.bundle_adjustment.refine_k1);
   // Round trip through the stored JSON.
   const JobOptions back = ParseJobOptions(ToJson(o));
   EXPECT_EQ(ToJson(back), ToJson(o));
