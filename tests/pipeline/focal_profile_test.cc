@@ -116,7 +116,7 @@ TEST(FocalProfile, AHeldFocalStaysHeldWhenTheRunIsResumed) {
   fs::remove_all(out);
 }
 
-TEST(FocalProfile, CheckpointKeepsTheHeldFocal) {
+TEST(FocalProfile, CheckpointKeepsTheHeldFocalAndK1) {
   const fs::path out = fs::temp_directory_path() / "glam_focal_profile_checkpoint";
   fs::remove_all(out);
   fs::create_directories(out);
@@ -126,12 +126,19 @@ TEST(FocalProfile, CheckpointKeepsTheHeldFocal) {
   c.focal = 512;
   c.input = "video.mp4";
   c.focal_held = true;
+  c.k1 = -0.118;  // an estimate (radial distortion)
   WriteCheckpoint(out, c);
   ASSERT_TRUE(ReadCheckpoint(out).has_value());
   EXPECT_TRUE(ReadCheckpoint(out)->focal_held);
+  EXPECT_DOUBLE_EQ(ReadCheckpoint(out)->k1, -0.118);
+  EXPECT_FALSE(ReadCheckpoint(out)->k1_held);
   c.focal_held = false;
+  c.k1 = 0.0;
+  c.k1_held = true;
   WriteCheckpoint(out, c);
   EXPECT_FALSE(ReadCheckpoint(out)->focal_held);
+  EXPECT_EQ(ReadCheckpoint(out)->k1, 0.0);
+  EXPECT_TRUE(ReadCheckpoint(out)->k1_held);
   fs::remove_all(out);
 }
 

@@ -2,7 +2,7 @@
 // SubmapOptions::k1_profile_min_rms_increase): a lens with barrel distortion mapped without
 // intrinsics must come out with its k1 and a map as good as a distortion-free lens gives;
 // mapped as pinhole it bends. Distortion-free lenses keeping k1 = 0 is asserted on the
-// focal-profile clips (focal_profile_test.cc). Ground truth: the fixture's trajectory,
+// focal-profile clips (focal_profile_test.cc), and so is the checkpoint's k1. Ground truth: the fixture's trajectory,
 // surface and intrinsics (k1 = -0.12).
 #include <cmath>
 #include <filesystem>
@@ -14,7 +14,6 @@
 #include "engine/core/intrinsics_io.h"
 #include "engine/pipeline/mapping_job.h"
 #include "engine/pipeline/mapping_report.h"
-#include "engine/pipeline/resume_checkpoint.h"
 #include "tools/eval/evaluation.h"
 
 namespace glam {
@@ -70,28 +69,6 @@ TEST(RadialDistortion, ABarrelLensGetsItsK1Estimated) {
   EXPECT_GT(bent.result.trajectory.ate_rmse, 2 * run.result.trajectory.ate_rmse);
   ASSERT_TRUE(bent.result.map.has_value());
   EXPECT_GT(bent.result.map->median, 5 * run.result.map->median);
-}
-
-TEST(RadialDistortion, CheckpointKeepsTheEstimateAndTheDecision) {
-  const fs::path out = fs::temp_directory_path() / "glam_radial_distortion_checkpoint";
-  fs::remove_all(out);
-  fs::create_directories(out);
-  ResumeCheckpoint c;
-  c.next_submap_id = 2;
-  c.resume_frame = 50;
-  c.focal = 560;
-  c.input = "video.mp4";
-  c.k1 = -0.118;
-  WriteCheckpoint(out, c);
-  ASSERT_TRUE(ReadCheckpoint(out).has_value());
-  EXPECT_DOUBLE_EQ(ReadCheckpoint(out)->k1, -0.118);
-  EXPECT_FALSE(ReadCheckpoint(out)->k1_held);
-  c.k1 = 0.0;
-  c.k1_held = true;
-  WriteCheckpoint(out, c);
-  EXPECT_EQ(ReadCheckpoint(out)->k1, 0.0);
-  EXPECT_TRUE(ReadCheckpoint(out)->k1_held);
-  fs::remove_all(out);
 }
 
 }  // namespace
