@@ -2,8 +2,8 @@
 # Robustness over flights and cameras the tests do not use (docs/benchmarks.md, "Robustness
 # over flights and cameras").
 #
-# Renders fourteen synthetic 600-frame clips at 640x360 with `glam synth` (skipped when already
-# rendered; seeds 41-52, 54, 55, used by no test), each changing one thing from the lawnmower at
+# Renders seventeen synthetic 600-frame clips at 640x360 with `glam synth` (skipped when already
+# rendered; seeds 41-52, 54-58, used by no test), each changing one thing from the lawnmower at
 # 100 m: speed, altitude, lens, distortion, trajectory, terrain, compression, pitch, frame
 # rate; and derives five more from the lawnmower clip with ffmpeg filters (an on-screen
 # display, exposure flicker, defocus, motion blur, a 3 s freeze of the stream). Maps each one as a user without a calibration would (`glam map`, no intrinsics: the
@@ -30,6 +30,9 @@ declare -A CLIP=(
   [distorted]="--trajectory lawnmower --k1 -0.15 --k2 0.02 --seed 46"
   [barrel_mild]="--trajectory lawnmower --k1 -0.07 --seed 54"
   [pincushion]="--trajectory loop --k1 0.06 --seed 55"
+  [orbit_barrel]="--trajectory orbit --pitch-deg 40 --altitude 50 --k1 -0.1 --seed 56"
+  [high_barrel]="--trajectory lawnmower --altitude 200 --speed 15 --k1 -0.1 --seed 57"
+  [wide_barrel]="--trajectory loop --focal 320 --k1 -0.05 --seed 58"
   [orbit]="--trajectory orbit --pitch-deg 40 --altitude 50 --seed 47"
   [flat]="--trajectory lawnmower --relief 0 --building-density 0 --seed 48"
   [crf32]="--trajectory loop --crf 32 --seed 49"
@@ -37,7 +40,7 @@ declare -A CLIP=(
   [high]="--trajectory lawnmower --altitude 200 --speed 15 --seed 51"
   [fps24]="--trajectory loop --fps 24 --wobble-deg 4 --seed 52"
 )
-ORDER="lawnmower fast low wide_lens narrow_lens distorted barrel_mild pincushion orbit flat crf32 pitch60 high fps24"
+ORDER="lawnmower fast low wide_lens narrow_lens distorted barrel_mild pincushion orbit_barrel high_barrel wide_barrel orbit flat crf32 pitch60 high fps24"
 # Derived from the lawnmower clip by an ffmpeg filter (Debian's ffmpeg, re-encoded at CRF 16);
 # the ground truth is copied, and where the filter changes what a frame shows, adjusted.
 declare -A DERIVED=(
