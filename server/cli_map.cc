@@ -146,7 +146,8 @@ void RegisterMapCommand(CLI::App& app) {
                "Refine the focal length of --intrinsics too (always refined without them)");
   cmd->add_flag("--fixed-k1", args->fixed_k1,
                "Do not estimate the lens' radial distortion k1 (0, or the k1 of --intrinsics, "
-               "which is never re-estimated); by default one k1 per flight is estimated");
+               "which is never re-estimated); by default k1 is estimated and kept where the first "
+               "submap fits clearly better with it (report.json k1, k1_held)");
   cmd->add_flag("--per-keyframe-focal", args->per_keyframe_focal,
                "Bundle adjustment refines one focal per keyframe (the paper) instead of one per "
                "submap");
