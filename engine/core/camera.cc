@@ -17,6 +17,11 @@ void CheckFinite(std::string_view name, double value) {
 
 }  // namespace
 
+void Intrinsics::SetK1(double value) {
+  k1 = value;
+  if (k1 != 0) model = "radial";
+}
+
 void Intrinsics::Check() const {
   if (model != "pinhole" && model != "radial") {
     throw InputError(

@@ -29,6 +29,9 @@ struct Intrinsics {
 
   // Throws InputError naming the offending field (e.g. "intrinsics.fx must be > 0, got -1").
   void Check() const;
+  // Sets k1, and the model to "radial" when k1 != 0 ("pinhole" allows no distortion; a radial
+  // model stays radial, k2 may need it).
+  void SetK1(double value);
 };
 
 class Camera {

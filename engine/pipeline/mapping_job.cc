@@ -155,8 +155,7 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
       options.resume ? UsableCheckpoint(out_dir, report) : std::nullopt;
   if (resume) {
     intrinsics.fx = intrinsics.fy = resume->focal;
-    intrinsics.k1 = resume->k1;
-    if (intrinsics.k1 != 0) intrinsics.model = "radial";
+    intrinsics.SetK1(resume->k1);
     report.resumed_from_frame = resume->resume_frame;
     source->SeekTo(resume->resume_frame);
     GLAM_LOG_INFO("resuming {} at frame {} with submap {} (focal {:.1f} px, k1 {:.4f})", report.input,

@@ -195,8 +195,7 @@ BundleAdjustmentSummary BundleAdjust(const Intrinsics& intrinsics, std::vector<K
     keyframes[k].focal = share ? shared_focal : pose.focal;
   }
   Intrinsics refined = intrinsics;
-  refined.k1 = k1;
-  if (k1 != 0) refined.model = "radial";
+  refined.SetK1(k1);
   summary.k1 = k1;
   summary.final_rms_pixels = RmsReprojection(refined, keyframes, landmarks);
   summary.iterations = static_cast<int>(ceres_summary.iterations.size());

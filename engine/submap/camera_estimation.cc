@@ -35,13 +35,16 @@ bool SubmapBuilder::RebuildIfCameraMoved(std::vector<Submap>* completed) {
   const bool first_submap = next_submap_id_ == 0;
   const BundleAdjustmentOptions& ba = options_.bundle_adjustment;
   if (!(ba.refine_focal || ba.refine_k1) || options_.rebuild_focal_change <= 0) return false;
-  if (DecideK1().has_value()) {
-    // Held or kept, the submap is tracked again at the decided k1 (and the focal of its
-    // estimate): its landmarks were triangulated while both were moving.
+  // The replay goes through the normal per-frame path, so it may complete this submap (and
+  // even rebuild it again, up to the limit) before the current frame is reached.
+  const auto track_again = [this, completed] {
     ++stats_.submap_rebuilds;
     RestartWith(std::move(open_.frames), open_.rebuilds + 1, completed);
     return true;
-  }
+  };
+  // Held or kept, the submap is tracked again at the decided k1 (and the focal of its
+  // estimate): its landmarks were triangulated while both were moving.
+  if (DecideK1().has_value()) return track_again();
   if (first_submap && ba.refine_focal && !stats_.focal_profile_rms_increase &&
       options_.focal_profile_step > 0) {
     const double increase = FocalProfileRmsIncrease();
@@ -54,24 +57,29 @@ bool SubmapBuilder::RebuildIfCameraMoved(std::vector<Submap>* completed) {
                     100.0 * options_.focal_profile_step, focal_, 100.0 * increase, intrinsics_.fx,
                     open_.frames.size());
       HoldInitialFocal();
-      ++stats_.submap_rebuilds;
-      RestartWith(std::move(open_.frames), open_.rebuilds + 1, completed);
-      return true;
+      return track_again();
     }
   }
   const double change = CameraChangeSinceSubmapStart();
   if (change <= options_.rebuild_focal_change) return false;
-  const int rebuilds = open_.rebuilds + 1;
-  ++stats_.submap_rebuilds;
   GLAM_LOG_INFO("camera estimate moved {:.1f} % at the image corner (focal {:.1f} -> {:.1f} px, k1 "
                 "{:.4f} -> {:.4f}) since frame {}: tracking the open submap's {} frames again "
                 "(rebuild {})",
                 100.0 * change, open_.start_focal, focal_, open_.start_k1, k1_,
-                open_.frames.front().index, open_.frames.size(), rebuilds);
-  // The replay goes through the normal per-frame path, so it may complete this submap (and
-  // even rebuild it again, up to the limit) before the current frame is reached.
-  RestartWith(std::move(open_.frames), rebuilds, completed);
-  return true;
+                open_.frames.front().index, open_.frames.size(), open_.rebuilds + 1);
+  return track_again();
+}
+
+double SubmapBuilder::AdjustedCopyRms(const Intrinsics& camera, const BundleAdjustmentOptions& ba,
+                                      std::optional<double> focal) {
+  std::vector<Keyframe> keyframes = open_.keyframes;
+  std::vector<Landmark> landmarks = open_.landmarks;
+  if (focal) {
+    for (Keyframe& kf : keyframes) kf.focal = *focal;
+  }
+  const BundleAdjustmentSummary summary = BundleAdjust(camera, keyframes, landmarks, ba, cancel_);
+  stats_.bundle_adjust_seconds += summary.seconds;
+  return summary.final_rms_pixels;
 }
 
 void SubmapBuilder::HoldInitialFocal() {
@@ -88,12 +96,7 @@ double SubmapBuilder::FocalProfileRmsIncrease() {
   std::array<double, 3> rms{};
   const std::array<double, 3> scales{1.0, 1.0 - step, 1.0 + step};
   for (std::size_t i = 0; i < scales.size(); ++i) {
-    std::vector<Keyframe> keyframes = open_.keyframes;
-    std::vector<Landmark> landmarks = open_.landmarks;
-    for (Keyframe& kf : keyframes) kf.focal = scales[i] * focal_;
-    const auto summary = BundleAdjust(CurrentCamera().intrinsics(), keyframes, landmarks, ba, cancel_);
-    stats_.bundle_adjust_seconds += summary.seconds;
-    rms[i] = summary.final_rms_pixels;
+    rms[i] = AdjustedCopyRms(CurrentCamera().intrinsics(), ba, scales[i] * focal_);
   }
   const double increase = rms[0] > 0 ? std::min(rms[1], rms[2]) / rms[0] - 1.0
                                      : std::numeric_limits<double>::infinity();
@@ -136,13 +139,9 @@ double SubmapBuilder::K1ProfileRmsIncrease() {
   std::array<double, 2> rms{};
   const std::array<double, 2> k1s{k1_, intrinsics_.k1};
   for (std::size_t i = 0; i < k1s.size(); ++i) {
-    std::vector<Keyframe> keyframes = open_.keyframes;
-    std::vector<Landmark> landmarks = open_.landmarks;
     Intrinsics camera = CurrentCamera().intrinsics();
-    camera.k1 = k1s[i];
-    const auto summary = BundleAdjust(camera, keyframes, landmarks, ba, cancel_);
-    stats_.bundle_adjust_seconds += summary.seconds;
-    rms[i] = summary.final_rms_pixels;
+    camera.SetK1(k1s[i]);
+    rms[i] = AdjustedCopyRms(camera, ba, std::nullopt);  // the keyframes' own focals
   }
   const double increase = rms[0] > 0 ? rms[1] / rms[0] - 1.0 : std::numeric_limits<double>::infinity();
   GLAM_LOG_INFO("k1 profile of the first submap ({} keyframes): rms {:.4f} px at k1 {:+.4f}, {:+.3f} % at "

@@ -29,8 +29,7 @@ Camera SubmapBuilder::CurrentCamera() const {
   Intrinsics in = intrinsics_;
   in.fy = focal_ * intrinsics_.fy / intrinsics_.fx;
   in.fx = focal_;
-  in.k1 = k1_;
-  if (k1_ != 0) in.model = "radial";
+  in.SetK1(k1_);
   return Camera(in);
 }
 

@@ -140,6 +140,10 @@ class SubmapBuilder {
   // The focal goes back to the builder's initial one and stays fixed (stats().focal_held); the
   // caller re-tracks the open submap if it was adjusted with another.
   void HoldInitialFocal();
+  // Reprojection rms of the open submap's keyframes and landmarks bundle adjusted on a copy
+  // with `ba` and `camera` (every keyframe at `focal` when given); the time counts in stats().
+  double AdjustedCopyRms(const Intrinsics& camera, const BundleAdjustmentOptions& ba,
+                         std::optional<double> focal);
   // SubmapOptions::k1_profile_min_rms_increase, on the open submap: the relative rms increase
   // of k1 fixed at its initial value over k1 fixed at the estimate (each adjusted to
   // convergence on a copy).

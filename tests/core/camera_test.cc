@@ -138,6 +138,23 @@ TEST(CameraTest, KMatrix) {
   EXPECT_EQ(h.z(), 1.0);
 }
 
+TEST(CameraTest, SetK1KeepsTheModelValid) {
+  Intrinsics pinhole = Radial();
+  pinhole.model = "pinhole";
+  pinhole.k1 = pinhole.k2 = 0;
+  pinhole.SetK1(0.0);
+  EXPECT_EQ(pinhole.model, "pinhole");  // no distortion: stays a pinhole
+  pinhole.SetK1(-0.05);
+  EXPECT_EQ(pinhole.model, "radial");
+  EXPECT_EQ(pinhole.k1, -0.05);
+  EXPECT_NO_THROW(pinhole.Check());
+  Intrinsics radial = Radial();
+  radial.SetK1(0.0);
+  EXPECT_EQ(radial.model, "radial");  // k2 still needs it
+  EXPECT_EQ(radial.k1, 0.0);
+  EXPECT_NO_THROW(radial.Check());
+}
+
 TEST(CameraTest, CheckRejectsBadIntrinsics) {
   auto expect_error = [](Intrinsics k, const std::string& field) {
     try {
