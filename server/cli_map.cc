@@ -163,6 +163,10 @@ void RegisterMapCommand(CLI::App& app) {
                   "A tracked frame at this median parallax (deg) to the last keyframe becomes a "
                   "keyframe even with many PnP inliers; 0 = the paper's inlier rule alone")
       ->capture_default_str();
+  cmd->add_option("--keyframe-coverage", args->options.submap.min_map_coverage,
+                  "A detected frame of whose textured view the map covers less than this fraction "
+                  "becomes a keyframe (climbs over the take-off point); 0 = the paper's rules alone")
+      ->capture_default_str();
   cmd->add_option("--bootstrap-parallax", args->options.submap.bootstrap_accept_parallax_deg,
                   "The bootstrap takes its second keyframe at this median parallax (deg) even "
                   "with many essential inliers; 0 = the paper's rule alone")
@@ -197,7 +201,7 @@ void RegisterMapCommand(CLI::App& app) {
       "Run the paper's method where the defaults deviate from it (SIFT on every frame, no "
       "feature grid, no parallax keyframe rules, per-keyframe focal, no completion bundle "
       "adjustment, ...; docs/algorithm.md); slower");
-  for (const char* name : {"--detect-every", "--feature-grid", "--keyframe-parallax",
+  for (const char* name : {"--detect-every", "--feature-grid", "--keyframe-parallax", "--keyframe-coverage",
                            "--bootstrap-parallax", "--completion-ba-frames", "--per-keyframe-focal"}) {
     paper->excludes(name);
   }

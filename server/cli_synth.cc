@@ -25,6 +25,11 @@ void RegisterSynthCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--stop-yaw-deg", options->stop_yaw_deg, "Yaw turned in place at each stop (deg)")
       ->capture_default_str();
+  cmd->add_option("--climb-from", options->climb_from,
+                  "Take-off climb: start this high above ground (m), rise to --altitude, then fly; 0 = no climb")
+      ->capture_default_str();
+  cmd->add_option("--climb-speed", options->climb_speed, "Vertical speed of the climb (m/s)")
+      ->capture_default_str();
   cmd->add_option("--fps", options->fps, "Frame rate")->capture_default_str();
   cmd->add_option("--frames", options->frames, "Number of frames")->capture_default_str();
   cmd->add_option("--width", options->width, "Image width (px, even)")->capture_default_str();

@@ -37,6 +37,7 @@ void UsePaperMethod(MappingOptions* options) {
   options->sift.grid_rows = 0;
   SubmapOptions& submap = options->submap;
   submap.max_keyframe_parallax_deg = 0;
+  submap.min_map_coverage = 0;
   submap.bootstrap_accept_parallax_deg = 0;
   submap.bundle_adjustment.share_focal = false;
   submap.focal_prior_growth = 0;

@@ -59,4 +59,25 @@ cv::Mat CompactFeatures::FloatDescriptors(const std::vector<int>& rows) const {
   return out;
 }
 
+double MapCoverage(const std::vector<Eigen::Vector2f>& keypoints, const std::vector<Eigen::Vector2d>& mapped,
+                   int width, int height, int columns, int min_features) {
+  const int rows = std::max(1, static_cast<int>(std::lround(columns * static_cast<double>(height) / width)));
+  const auto cell_of = [&](double x, double y) {
+    const int c = std::clamp(static_cast<int>(x * columns / width), 0, columns - 1);
+    const int r = std::clamp(static_cast<int>(y * rows / height), 0, rows - 1);
+    return r * columns + c;
+  };
+  std::vector<int> features(static_cast<std::size_t>(rows * columns), 0);
+  std::vector<bool> covered(features.size(), false);
+  for (const Eigen::Vector2f& p : keypoints) ++features[cell_of(p.x(), p.y())];
+  for (const Eigen::Vector2d& p : mapped) covered[cell_of(p.x(), p.y())] = true;
+  int textured = 0, explained = 0;
+  for (std::size_t i = 0; i < features.size(); ++i) {
+    if (features[i] < min_features) continue;
+    ++textured;
+    if (covered[i]) ++explained;
+  }
+  return textured > 0 ? static_cast<double>(explained) / textured : 1.0;
+}
+
 }  // namespace glam

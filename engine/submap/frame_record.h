@@ -53,4 +53,13 @@ struct FrameRecord {
   std::vector<std::pair<int, std::uint32_t>> landmark_matches;
 };
 
+// How much of a frame's textured view the map covers: the image is cut into a grid of
+// `columns` columns (rows in proportion to the aspect ratio); of the cells holding at least
+// `min_features` of the frame's keypoints, the fraction that also hold a point of `mapped`
+// (landmarks projected into the frame). 1 when no cell is textured. The share of unmapped
+// ground in view, whichever way it came into view: a drone climbing over its take-off point
+// keeps all its landmarks in view and tracked while they shrink towards the image centre.
+double MapCoverage(const std::vector<Eigen::Vector2f>& keypoints, const std::vector<Eigen::Vector2d>& mapped,
+                   int width, int height, int columns = 8, int min_features = 3);
+
 }  // namespace glam

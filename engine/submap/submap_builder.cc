@@ -125,6 +125,9 @@ void SubmapBuilder::Process(FrameRecord record, std::vector<Submap>* completed) 
   // parallax. Looked at only above tau_resection: below it, a detected frame that the paper
   // rule did not take has less parallax than triangulation needs, which Check() keeps below
   // the rule's angle, so the parallax is never computed twice.
+  // Coverage rule (SubmapOptions::min_map_coverage): a detected frame of whose textured view
+  // the map covers little, once it can triangulate (both looked at only when the other rules
+  // did not take it).
   const bool about_to_lose = inliers < 2 * options_.min_tracking_inliers;
   const bool below_tau = inliers < open_.tau_resection;
   const bool paper_keyframe =
@@ -132,7 +135,10 @@ void SubmapBuilder::Process(FrameRecord record, std::vector<Submap>* completed) 
   const bool parallax_keyframe =
       !below_tau && current.detected && options_.max_keyframe_parallax_deg > 0 &&
       ParallaxToLastKeyframeDeg(current) >= options_.max_keyframe_parallax_deg;
-  if (paper_keyframe || parallax_keyframe) InsertKeyframes(open_.frames.size() - 1);
+  const bool coverage_keyframe = !below_tau && !parallax_keyframe && current.detected &&
+                                 options_.min_map_coverage > 0 && MapCoverageLow(current) &&
+                                 CanTriangulateWithLastKeyframe(current);
+  if (paper_keyframe || parallax_keyframe || coverage_keyframe) InsertKeyframes(open_.frames.size() - 1);
 
   if ((!extending_tail_ && static_cast<int>(open_.keyframes.size()) >= options_.keyframes_per_submap) ||
       static_cast<int>(open_.frames.size()) >= options_.max_frames_per_submap) {
@@ -167,6 +173,26 @@ double SubmapBuilder::ParallaxToLastKeyframeDeg(const FrameRecord& frame) const 
     }
   }
   return UpperMedian(std::move(angles));
+}
+
+double SubmapBuilder::MapCoverageOf(const FrameRecord& frame) const {
+  const Camera camera = CurrentCamera();
+  std::vector<Eigen::Vector2d> mapped;
+  mapped.reserve(open_.landmarks.size());
+  for (const Landmark& landmark : open_.landmarks) {
+    Eigen::Vector2d px;
+    if (camera.Project(*frame.cam_from_submap * landmark.point_in_submap, &px) && camera.InImage(px)) {
+      mapped.push_back(px);
+    }
+  }
+  return MapCoverage(frame.features.points, mapped, camera.intrinsics().width, camera.intrinsics().height);
+}
+
+bool SubmapBuilder::MapCoverageLow(const FrameRecord& frame) const {
+  const double coverage = MapCoverageOf(frame);
+  if (coverage >= options_.min_map_coverage) return false;
+  GLAM_LOG_TRACE("frame {}: the map covers {:.2f} of the textured view", frame.index, coverage);
+  return true;
 }
 
 bool SubmapBuilder::CanTriangulateWithLastKeyframe(const FrameRecord& frame) const {

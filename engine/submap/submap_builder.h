@@ -119,6 +119,10 @@ class SubmapBuilder {
   // Parallax to the last keyframe of at least twice min_triangulation_angle_deg: the middle
   // keyframe / `frame` pair of a new keyframe can triangulate.
   bool CanTriangulateWithLastKeyframe(const FrameRecord& frame) const;
+  // MapCoverage of the posed `frame`: the open submap's landmarks projected with its pose.
+  double MapCoverageOf(const FrameRecord& frame) const;
+  // MapCoverageOf(frame) below SubmapOptions::min_map_coverage (logged).
+  bool MapCoverageLow(const FrameRecord& frame) const;
   // Position in `frames` of the newest posed frame after the last keyframe, if any.
   std::optional<std::size_t> LastTrackedAfterLastKeyframe() const;
 

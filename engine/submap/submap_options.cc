@@ -34,6 +34,7 @@ void SubmapOptions::Check() const {
   CheckGreater("SubmapOptions.pnp_threshold_pixels", pnp_threshold_pixels, 0.0);
   CheckInRange("SubmapOptions.min_triangulation_angle_deg", min_triangulation_angle_deg, 0.0, 45.0);
   CheckInRange("SubmapOptions.max_keyframe_parallax_deg", max_keyframe_parallax_deg, 0.0, 90.0);
+  CheckInRange("SubmapOptions.min_map_coverage", min_map_coverage, 0.0, 1.0);
   CheckGreater("SubmapOptions.max_new_point_reprojection_pixels", max_new_point_reprojection_pixels, 0.0);
   CheckGreaterEqual("SubmapOptions.max_frames_per_submap", max_frames_per_submap, 10);
   CheckGreaterEqual("SubmapOptions.completion_ba_max_frames", completion_ba_max_frames, 0);

@@ -128,6 +128,7 @@ TEST(MappingOptions, PaperMethodTurnsTheDeviationsOff) {
   EXPECT_EQ(paper.detection_interval, 1);
   EXPECT_EQ(paper.sift.grid_cols, 0);
   EXPECT_EQ(paper.submap.max_keyframe_parallax_deg, 0.0);
+  EXPECT_EQ(paper.submap.min_map_coverage, 0.0);
   EXPECT_EQ(paper.submap.bootstrap_accept_parallax_deg, 0.0);
   EXPECT_FALSE(paper.submap.bundle_adjustment.share_focal);
   EXPECT_EQ(paper.submap.focal_prior_growth, 0.0);
@@ -141,6 +142,7 @@ TEST(MappingOptions, PaperMethodTurnsTheDeviationsOff) {
   EXPECT_NE(defaults.detection_interval, 1);
   EXPECT_GT(defaults.sift.grid_cols, 0);
   EXPECT_GT(defaults.submap.completion_ba_max_frames, 0);
+  EXPECT_GT(defaults.submap.min_map_coverage, 0.0);
   EXPECT_EQ(paper.submap.tau_resection, defaults.submap.tau_resection);
   EXPECT_EQ(paper.submap.tau_stereo, defaults.submap.tau_stereo);
   EXPECT_EQ(paper.submap.keyframes_per_submap, defaults.submap.keyframes_per_submap);

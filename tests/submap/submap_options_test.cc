@@ -49,6 +49,11 @@ TEST(SubmapOptions, RejectsBadParallaxRules) {
   o.bootstrap_accept_parallax_deg = 95;
   ExpectRejected(o, "bootstrap_accept_parallax_deg");
   o = {};
+  o.min_map_coverage = -0.1;
+  ExpectRejected(o, "min_map_coverage");
+  o.min_map_coverage = 1.5;  // a fraction
+  ExpectRejected(o, "min_map_coverage");
+  o = {};
   o.max_keyframe_parallax_deg = 8;
   o.bootstrap_accept_parallax_deg = 6;
   EXPECT_NO_THROW(o.Check());

@@ -270,6 +270,62 @@ TEST(SynthTrajectory, StopAndYawHoversStillTurnsInPlaceAndFliesOn) {
   EXPECT_GT(Eigen::AngleAxisd(turn).angle(), 0.5 * std::numbers::pi / 2);
 }
 
+// Take-off climb: the clip starts climb_from metres above the ground, rises straight up to
+// the altitude with smooth vertical speed, and only then flies the path from rest.
+TEST(SynthTrajectory, ClimbRisesStraightUpThenFliesThePath) {
+  SynthOptions o;
+  EXPECT_DOUBLE_EQ(ProgressAt(o, 3.0).height, o.altitude);  // no climb: at altitude throughout
+  EXPECT_DOUBLE_EQ(o.ClimbSeconds(), 0.0);
+  o.altitude = 100;
+  o.climb_from = 30;
+  o.climb_speed = 5;  // 70 m: 14 s at full speed plus half of each 1.5 s ramp
+  const double ramp = o.ClimbRampSeconds();
+  ASSERT_DOUBLE_EQ(ramp, 1.5);
+  ASSERT_DOUBLE_EQ(o.ClimbSeconds(), 15.5);
+  EXPECT_DOUBLE_EQ(ProgressAt(o, 0.0).height, 30.0);
+  EXPECT_NEAR(ProgressAt(o, 7.75).height, 65.0, 1e-9);  // halfway up at half time (symmetric)
+  EXPECT_DOUBLE_EQ(ProgressAt(o, 15.0).metres, 0.0);    // no path flown while climbing
+  EXPECT_NEAR(ProgressAt(o, 15.5).height, 100.0, 1e-9);
+  // The path starts from rest and then runs half a ramp behind.
+  EXPECT_NEAR(ProgressAt(o, 15.5 + ramp).metres, 0.5 * o.speed * ramp, 1e-9);
+  EXPECT_NEAR(ProgressAt(o, 25.0).metres, o.speed * (25.0 - 15.5 - 0.5 * ramp), 1e-9);
+  EXPECT_DOUBLE_EQ(ProgressAt(o, 25.0).height, 100.0);
+  // Smooth: vertical and horizontal speeds within bounds and continuous (no step above what
+  // a raised-cosine ramp changes in 10 ms).
+  double max_climb = 0, max_speed = 0, max_climb_change = 0, max_speed_change = 0;
+  double last_climb = 0, last_speed = 0;
+  for (double t = 0; t < 30; t += 0.01) {
+    const FlightProgress a = ProgressAt(o, t), b = ProgressAt(o, t + 0.01);
+    const double climb = (b.height - a.height) / 0.01, speed = (b.metres - a.metres) / 0.01;
+    EXPECT_GE(climb, -1e-9);
+    EXPECT_GE(speed, -1e-9);
+    max_climb = std::max(max_climb, climb);
+    max_speed = std::max(max_speed, speed);
+    if (t > 0) {
+      max_climb_change = std::max(max_climb_change, std::abs(climb - last_climb));
+      max_speed_change = std::max(max_speed_change, std::abs(speed - last_speed));
+    }
+    last_climb = climb;
+    last_speed = speed;
+  }
+  EXPECT_LT(max_climb, o.climb_speed * 1.0001);
+  EXPECT_LT(max_speed, o.speed * 1.0001);
+  EXPECT_LT(max_climb_change, 0.06);  // 5 m/s over 1.5 s: at most ~0.05 m/s per 10 ms
+  EXPECT_LT(max_speed_change, 0.11);  // 10 m/s over 1.5 s
+
+  // The rendered trajectory: straight up over the path's start, then away at altitude.
+  o.frames = 600;
+  o.wobble_deg = 0;
+  const TerrainFn terrain = Terrain(o);
+  const std::vector<SE3> poses = MakeTrajectory(o, terrain);
+  const Eigen::Vector3d first = poses.front().translation(), top = poses[465].translation();
+  EXPECT_LT((top.head<2>() - first.head<2>()).norm(), 1e-6);
+  EXPECT_NEAR(top.z() - first.z(), 70.0, 1e-6);
+  EXPECT_GT((poses.back().translation().head<2>() - top.head<2>()).norm(), 30.0);
+  EXPECT_TRUE(o.ToJson().contains("climb_from"));
+  EXPECT_FALSE(SynthOptions().ToJson().contains("climb_from"));  // older clips stay up to date
+}
+
 TEST(SynthFiles, ClipFilesExistParseAndMatch) {
   SynthOptions o = SmallOptions();
   o.out = (fs::path(testing::TempDir()) / "glam_synth_files").string();
@@ -365,6 +421,9 @@ TEST(SynthOptions, CheckRejectsNonsense) {
   rejects([](SynthOptions& o) { o.stop_every = -10; });
   rejects([](SynthOptions& o) { o.stop_every = 50; o.stop_seconds = 0.5; });
   rejects([](SynthOptions& o) { o.stop_every = 50; o.stop_yaw_deg = 400; });
+  rejects([](SynthOptions& o) { o.climb_from = 5; });           // roofs too close
+  rejects([](SynthOptions& o) { o.climb_from = o.altitude; });  // nothing to climb
+  rejects([](SynthOptions& o) { o.climb_from = 30; o.climb_speed = 0; });
   EXPECT_THROW(ParseTrajectoryKind("zigzag"), InputError);
   EXPECT_EQ(ParseTrajectoryKind("orbit"), TrajectoryKind::kOrbit);
 }

@@ -33,6 +33,17 @@ double SynthOptions::EffectiveFocal() const {
 
 double SynthOptions::StopRampSeconds() const { return std::min(1.5, 0.25 * stop_seconds); }
 
+double SynthOptions::ClimbRampSeconds() const {
+  if (climb_from <= 0) return 0.0;
+  return std::min(1.5, 0.5 * (altitude - climb_from) / climb_speed);
+}
+
+double SynthOptions::ClimbSeconds() const {
+  if (climb_from <= 0) return 0.0;
+  // Each ramp covers half the distance it would at full speed.
+  return (altitude - climb_from) / climb_speed + ClimbRampSeconds();
+}
+
 void SynthOptions::Check() const {
   CheckInRange("synth.altitude", altitude, 20.0, 1000.0);
   CheckInRange("synth.pitch_deg", pitch_deg, 0.0, 80.0);
@@ -43,6 +54,12 @@ void SynthOptions::Check() const {
     CheckInRange("synth.stop_every", stop_every, 1.0, 1e6);
     CheckInRange("synth.stop_seconds", stop_seconds, 1.0, 600.0);
     CheckInRange("synth.stop_yaw_deg", stop_yaw_deg, -360.0, 360.0);
+  }
+  CheckGreaterEqual("synth.climb_from", climb_from, 0.0);
+  if (climb_from > 0) {
+    // Below ~10 m the roofs of the village come too close to the camera.
+    CheckInRange("synth.climb_from", climb_from, 10.0, altitude - 1.0);
+    CheckInRange("synth.climb_speed", climb_speed, 0.5, 20.0);
   }
   CheckInRange("synth.fps", fps, 1.0, 240.0);
   CheckInRange("synth.frames", frames, 1, 1000000);
@@ -96,6 +113,10 @@ nlohmann::json SynthOptions::ToJson() const {
     j["stop_every"] = stop_every;
     j["stop_seconds"] = stop_seconds;
     j["stop_yaw_deg"] = stop_yaw_deg;
+  }
+  if (climb_from > 0) {
+    j["climb_from"] = climb_from;
+    j["climb_speed"] = climb_speed;
   }
   return j;
 }

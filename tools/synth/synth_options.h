@@ -31,6 +31,13 @@ struct SynthOptions {
   double stop_every = 0.0;    // metres of path between stops; 0 = never stop
   double stop_seconds = 6.0;  // each stop: 1.5 s slowing down, the yaw, 1.5 s speeding up
   double stop_yaw_deg = 90.0; // yaw turned during each stop (added to the path heading)
+  // Take-off climb, as raw flight videos begin: the clip starts `climb_from` metres above the
+  // ground at the path's start, rises straight up at `climb_speed` (smooth speed ramps) to
+  // `altitude`, and only then flies the path (speeding up smoothly). A nadir camera sees the
+  // ground zoom out: the motion is along the optical axis, parallax grows from nothing at the
+  // image centre to most at the edges, and the ground sample distance changes several-fold.
+  double climb_from = 0.0;    // metres above ground at the first frame; 0 = no climb
+  double climb_speed = 5.0;   // m/s upwards
   double fps = 30.0;
   int frames = 600;
 
@@ -55,6 +62,10 @@ struct SynthOptions {
 
   // The slowing down and the speeding up of a stop (s); the yaw takes the rest of it.
   double StopRampSeconds() const;
+  // Speeding up and slowing down of the climb, and the climb's whole duration (s; 0 without
+  // one). The path is flown from ClimbSeconds() on.
+  double ClimbRampSeconds() const;
+  double ClimbSeconds() const;
 
   // Focal length actually used (resolves focal == 0).
   double EffectiveFocal() const;

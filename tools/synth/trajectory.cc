@@ -174,8 +174,17 @@ SO3 CameraRotation(double heading, double pitch, double roll) {
   return SO3(Eigen::Matrix3d(rz * base * rx * ry));
 }
 
-FlightProgress ProgressAt(const SynthOptions& o, double t) {
-  if (o.stop_every <= 0) return {o.speed * t, 0.0};
+namespace {
+
+// Distance covered x seconds into a speed-up from rest to `speed` over `ramp` seconds, speed
+// speed * (1 - cos(pi x / ramp)) / 2; the whole ramp covers speed * ramp / 2.
+double SpeedUpDistance(double x, double speed, double ramp) {
+  return speed * (0.5 * x - ramp / (2 * kPi) * std::sin(kPi * x / ramp));
+}
+
+// The path part of ProgressAt: metres and yaw at time t of the path's own clock.
+FlightProgress PathProgress(const SynthOptions& o, double t) {
+  if (o.stop_every <= 0) return {o.speed * t, 0.0, o.altitude};
   const double cruise = o.stop_every / o.speed;          // seconds between stops
   const double ramp = o.StopRampSeconds();                 // slowing down, speeding up
   const double hover = o.stop_seconds - 2 * ramp;          // the yaw in place
@@ -184,22 +193,48 @@ FlightProgress ProgressAt(const SynthOptions& o, double t) {
   const double cycle = std::floor(t / (cruise + o.stop_seconds));
   const double tau = t - cycle * (cruise + o.stop_seconds);
   const double base = cycle * per_cycle;
-  if (tau < cruise) return {base + o.speed * tau, cycle * yaw};
+  if (tau < cruise) return {base + o.speed * tau, cycle * yaw, o.altitude};
   const double sigma = tau - cruise;
   const double stop_at = base + o.stop_every;
   // Speed speed * (1 + cos(pi x / ramp)) / 2 while slowing down, its mirror while speeding up.
   if (sigma < ramp) {
     return {stop_at + o.speed * (0.5 * sigma + ramp / (2 * kPi) * std::sin(kPi * sigma / ramp)),
-            cycle * yaw};
+            cycle * yaw, o.altitude};
   }
   const double hovered_at = stop_at + 0.5 * o.speed * ramp;
   if (sigma < ramp + hover) {
     const double u = (sigma - ramp) / hover;
-    return {hovered_at, (cycle + 0.5 * (1 - std::cos(kPi * u))) * yaw};
+    return {hovered_at, (cycle + 0.5 * (1 - std::cos(kPi * u))) * yaw, o.altitude};
   }
   const double rho = sigma - ramp - hover;
-  return {hovered_at + o.speed * (0.5 * rho - ramp / (2 * kPi) * std::sin(kPi * rho / ramp)),
-          (cycle + 1) * yaw};
+  return {hovered_at + SpeedUpDistance(rho, o.speed, ramp), (cycle + 1) * yaw, o.altitude};
+}
+
+// Distance covered by time t of a move of `distance` at `speed` that speeds up over `ramp`
+// seconds from rest and slows down over `ramp` seconds to rest.
+double RampedDistance(double t, double distance, double speed, double ramp) {
+  const double duration = distance / speed + ramp;
+  if (t <= 0) return 0.0;
+  if (t >= duration) return distance;
+  if (t < ramp) return SpeedUpDistance(t, speed, ramp);
+  if (t > duration - ramp) return distance - SpeedUpDistance(duration - t, speed, ramp);
+  return speed * (t - 0.5 * ramp);
+}
+
+}  // namespace
+
+FlightProgress ProgressAt(const SynthOptions& o, double t) {
+  if (o.climb_from <= 0) return PathProgress(o, t);
+  const double ramp = o.ClimbRampSeconds();
+  const double climbed = o.ClimbSeconds();
+  if (t < climbed) {
+    return {0.0, 0.0, o.climb_from + RampedDistance(t, o.altitude - o.climb_from, o.climb_speed, ramp)};
+  }
+  // The path starts from rest, then runs on its own clock half a ramp behind (what the
+  // speed-up flew less than full speed would have).
+  const double tau = t - climbed;
+  if (tau < ramp) return {SpeedUpDistance(tau, o.speed, ramp), 0.0, o.altitude};
+  return PathProgress(o, tau - 0.5 * ramp);
 }
 
 std::vector<SE3> MakeTrajectory(const SynthOptions& o, const TerrainFn& terrain) {
@@ -251,7 +286,7 @@ std::vector<SE3> MakeTrajectory(const SynthOptions& o, const TerrainFn& terrain)
     const double s = std::min(ProgressAt(o, t).metres, static_cast<double>(ground.size() - 1));
     const std::size_t k = std::min(static_cast<std::size_t>(s), ground.size() - 2);
     const double a = s - k;
-    const double z = (1 - a) * ground[k] + a * ground[k + 1] + o.altitude;
+    const double z = (1 - a) * ground[k] + a * ground[k + 1] + ProgressAt(o, t).height;
     const double psi = heading[f] + Wobble(t, wobble, phases[0], phases[1]);
     const double pitch = o.pitch_deg * kDeg + Wobble(t, wobble, phases[2], phases[3]);
     const double roll = Wobble(t, wobble, phases[4], phases[5]);

@@ -22,13 +22,16 @@ using TerrainFn = std::function<double(double x, double y)>;
 // axis from nadir (0) towards that heading.
 SO3 CameraRotation(double heading, double pitch, double roll = 0.0);
 
-// Where the flight is at time t (s): metres flown along the path and the yaw (rad) the stops
-// have added so far (SynthOptions::stop_every). Without stops: speed * t and 0. Speed falls
-// and rises smoothly (raised cosine) around each hover and the yaw eases in and out, so
-// velocity and angular rate never jump.
+// Where the flight is at time t (s): metres flown along the path, the yaw (rad) the stops
+// have added so far (SynthOptions::stop_every) and the height above the ground under the
+// path (SynthOptions::climb_from). Without stops or climb: speed * t, 0 and the altitude.
+// Speed falls and rises smoothly (raised cosine) around each hover, the yaw eases in and
+// out, and the climb speeds up and slows down the same way before the path starts with a
+// smooth speed-up, so velocity and angular rate never jump.
 struct FlightProgress {
   double metres = 0;
   double extra_yaw = 0;
+  double height = 0;
 };
 FlightProgress ProgressAt(const SynthOptions& options, double t);
 
