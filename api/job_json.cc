@@ -92,10 +92,15 @@ JobOptions ParseJobOptions(const json& j) {
         throw InputError(fmt::format("options.detect_every must be in [0, 1000] (0 = automatic), got {}",
                                      *o.detect_every));
       }
+    } else if (key == "fixed_k1") {
+      if (!value.is_boolean()) {
+        throw InputError(fmt::format("options.fixed_k1 must be true or false, got {}", value.dump()));
+      }
+      o.fixed_k1 = value.get<bool>();
     } else {
       throw InputError(fmt::format(
           "options: unknown key \"{}\" (known: name, stride, focal, intrinsics, "
-          "keyframes_per_submap, max_image_size, detect_every)",
+          "keyframes_per_submap, max_image_size, detect_every, fixed_k1)",
           key));
     }
   }
@@ -127,6 +132,7 @@ json ToJson(const JobOptions& o) {
   if (o.keyframes_per_submap) j["keyframes_per_submap"] = *o.keyframes_per_submap;
   if (o.max_image_size) j["max_image_size"] = *o.max_image_size;
   if (o.detect_every) j["detect_every"] = *o.detect_every;
+  if (o.fixed_k1) j["fixed_k1"] = *o.fixed_k1;
   return j;
 }
 
@@ -138,6 +144,7 @@ MappingOptions ToMappingOptions(const JobOptions& o) {
   if (o.focal) m.focal_px = *o.focal;
   if (o.keyframes_per_submap) m.submap.keyframes_per_submap = *o.keyframes_per_submap;
   if (o.detect_every) m.detection_interval = *o.detect_every;
+  if (o.fixed_k1 && *o.fixed_k1) m.submap.bundle_adjustment.refine_k1 = false;  // as --fixed-k1
   m.Check();
   return m;
 }

@@ -25,10 +25,13 @@ struct JobOptions {
   std::optional<int> keyframes_per_submap;  // submap size
   std::optional<int> max_image_size;        // processing long side (px), 0 = no downscale
   std::optional<int> detect_every;          // SIFT on every N-th frame (1 = every frame, 0 = auto)
+  // Keep the lens' radial distortion k1 as it is (0, or the k1 of `intrinsics`, which is
+  // never re-estimated) instead of estimating it (`glam map --fixed-k1`).
+  std::optional<bool> fixed_k1;
 };
 
 // Accepts an object with the keys name, stride, focal, intrinsics, keyframes_per_submap,
-// max_image_size, detect_every (all optional). Throws InputError naming the key for unknown keys, wrong
+// max_image_size, detect_every, fixed_k1 (all optional). Throws InputError naming the key for unknown keys, wrong
 // types or out-of-range values (the resulting MappingOptions are Check()ed as well).
 JobOptions ParseJobOptions(const nlohmann::json& j);
 // Parses text as JSON first (InputError "options: malformed JSON ...").

@@ -2,10 +2,10 @@
 # Robustness over flights and cameras the tests do not use (docs/benchmarks.md, "Robustness
 # over flights and cameras").
 #
-# Renders seventeen synthetic 600-frame clips at 640x360 with `glam synth` (skipped when already
-# rendered; seeds 41-52, 54-58, used by no test), each changing one thing from the lawnmower at
+# Renders eighteen synthetic 600-frame clips at 640x360 with `glam synth` (skipped when already
+# rendered; seeds 41-52, 54-59, used by no test), each changing one thing from the lawnmower at
 # 100 m: speed, altitude, lens, distortion, trajectory, terrain, compression, pitch, frame
-# rate; and derives five more from the lawnmower clip with ffmpeg filters (an on-screen
+# rate, a take-off climb; and derives five more from the lawnmower clip with ffmpeg filters (an on-screen
 # display, exposure flicker, defocus, motion blur, a 3 s freeze of the stream). Maps each one as a user without a calibration would (`glam map`, no intrinsics: the
 # focal is estimated from the 0.8 x long-side guess) and, with CALIBRATED=1, also with the
 # clip's true intrinsics. Prints one row per run: estimated focal against the truth, whether
@@ -39,8 +39,9 @@ declare -A CLIP=(
   [pitch60]="--trajectory loop --pitch-deg 60 --altitude 40 --seed 50"
   [high]="--trajectory lawnmower --altitude 200 --speed 15 --seed 51"
   [fps24]="--trajectory loop --fps 24 --wobble-deg 4 --seed 52"
+  [climb]="--trajectory lawnmower --climb-from 30 --seed 59"
 )
-ORDER="lawnmower fast low wide_lens narrow_lens distorted barrel_mild pincushion orbit_barrel high_barrel wide_barrel orbit flat crf32 pitch60 high fps24"
+ORDER="lawnmower fast low wide_lens narrow_lens distorted barrel_mild pincushion orbit_barrel high_barrel wide_barrel orbit flat crf32 pitch60 high fps24 climb"
 # Derived from the lawnmower clip by an ffmpeg filter (Debian's ffmpeg, re-encoded at CRF 16);
 # the ground truth is copied, and where the filter changes what a frame shows, adjusted.
 declare -A DERIVED=(

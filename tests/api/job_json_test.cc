@@ -32,6 +32,13 @@ TEST(JobJson, ParsesOptionsAndMapsThemToEngineOptions) {
   EXPECT_FALSE(m.submap.bundle_adjustment.refine_k1);
   EXPECT_TRUE(ToMappingOptions(JobOptions{}).submap.bundle_adjustment.refine_focal);
   EXPECT_TRUE(ToMappingOptions(JobOptions{}).submap.bundle_adjustment.refine_k1);
+  // fixed_k1 keeps k1 (as `glam map --fixed-k1`) and leaves the focal estimated.
+  const JobOptions fixed = ParseJobOptionsText(R"({"fixed_k1": true})");
+  ASSERT_TRUE(fixed.fixed_k1.has_value());
+  EXPECT_FALSE(ToMappingOptions(fixed).submap.bundle_adjustment.refine_k1);
+  EXPECT_TRUE(ToMappingOptions(fixed).submap.bundle_adjustment.refine_focal);
+  EXPECT_TRUE(ToMappingOptions(ParseJobOptionsText(R"({"fixed_k1": false})")).submap.bundle_adjustment.refine_k1);
+  EXPECT_EQ(ToJson(fixed), json::parse(R"({"fixed_k1": true})"));
   // Round trip through the stored JSON.
   const JobOptions back = ParseJobOptions(ToJson(o));
   EXPECT_EQ(ToJson(back), ToJson(o));
@@ -53,6 +60,8 @@ TEST(JobJson, RejectsBadOptionsWithTheKeyInTheMessage) {
   EXPECT_NE(message(R"({"stride": 0})").find("stride"), std::string::npos);
   EXPECT_NE(message(R"({"focal": -5})").find("focal"), std::string::npos);
   EXPECT_NE(message(R"({"detect_every": -1})").find("detect_every"), std::string::npos);
+  EXPECT_NE(message(R"({"fixed_k1": "yes"})").find("fixed_k1"), std::string::npos);
+  EXPECT_NE(message(R"({"fixed_k1": 1})").find("fixed_k1"), std::string::npos);
   EXPECT_NE(message(R"({"intrinsics": {"model": "pinhole"}})").find("width"), std::string::npos);
   EXPECT_EQ(message("{}"), "accepted");
 }

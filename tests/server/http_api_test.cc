@@ -287,13 +287,14 @@ TEST_F(HttpApiTest, MapTilesTilesetAndFormatsAreServed) {
 TEST_F(HttpApiTest, RawBodyUploadTakesOptionsFromQuery) {
   Start({}, "raw");
   auto client = Client();
-  auto res = client.Post("/api/v1/jobs?name=raw%20clip&stride=2&filename=c.avi",
+  auto res = client.Post("/api/v1/jobs?name=raw%20clip&stride=2&fixed_k1=true&filename=c.avi",
                          glam::testing::ReadFile(video_), "video/x-msvideo");
   ASSERT_TRUE(res);
   ASSERT_EQ(res->status, 201) << res->body;
   const json job = json::parse(res->body);
   EXPECT_EQ(job["name"], "raw clip");
   EXPECT_EQ(job["options"]["stride"], 2);
+  EXPECT_EQ(job["options"]["fixed_k1"], true);
   EXPECT_TRUE(fs::exists(dir_ / "data" / "jobs" / job["id"].get<std::string>() / "input.avi"));
   res = client.Post("/api/v1/jobs", {{"X-Glam-Options", R"({"keyframes_per_submap": 6})"}},
                     glam::testing::ReadFile(video_), "application/octet-stream");
@@ -319,6 +320,8 @@ TEST_F(HttpApiTest, BadRequestCorpusGetsDocumentedStatuses) {
   ExpectError(UploadMultipart(client, "{not json"), 400, "bad_request", "malformed options");
   ExpectError(UploadMultipart(client, R"({"stride": -3})"), 400, "bad_request", "bad stride");
   ExpectError(client.Post("/api/v1/jobs?stride=abc", video, "video/x-msvideo"), 400, "bad_request", "bad query");
+  ExpectError(client.Post("/api/v1/jobs?fixed_k1=maybe", video, "video/x-msvideo"), 400, "bad_request",
+              "bad boolean query");
   ExpectError(client.Post("/api/v1/jobs", httplib::MultipartFormDataItems{{"other", "x", "", "text/plain"}}), 400,
               "missing_video", "no video field");
   ExpectError(client.Get("/api/v1/jobs/ffffffffffffffff"), 404, "not_found", "unknown id");
