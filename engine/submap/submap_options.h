@@ -77,8 +77,9 @@ struct SubmapOptions {
   // nadir climb from 30 to 100 m, coverage fell from 0.60 to 0.15, no keyframe was taken for
   // 440 frames, and frames were posed from ~100 central landmarks (errors up to 1.8 m, ATE
   // 0.50 m; with the rule 0.11 m). In level flight the other rules keep it at 0.42-1.0 on
-  // nadir clips; oblique views whose far field is never triangulated go down to 0.30 (60 deg
-  // from nadir). 0 = off (the paper).
+  // nadir clips and the 60-deg oblique one (whose far field is never triangulated); of 25
+  // non-climb clips one changes (a 25 m flight, ATE 0.062 -> 0.088 m; docs/benchmarks.md).
+  // 0 = off (the paper).
   double min_map_coverage = 0.35;
   double max_new_point_reprojection_pixels = 3.0;
   // Look for new landmarks in earlier keyframes too (longer tracks). Off by default: on
