@@ -30,6 +30,11 @@ void RegisterSynthCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--climb-speed", options->climb_speed, "Vertical speed of the climb (m/s)")
       ->capture_default_str();
+  cmd->add_option("--tilt-from-deg", options->tilt_from_deg,
+                  "Gimbal tilt at the start: the camera starts this far from nadir (deg) and eases to --pitch-deg")
+      ->capture_default_str();
+  cmd->add_option("--tilt-seconds", options->tilt_seconds, "Duration of that tilt (s); 0 = no tilt")
+      ->capture_default_str();
   cmd->add_option("--fps", options->fps, "Frame rate")->capture_default_str();
   cmd->add_option("--frames", options->frames, "Number of frames")->capture_default_str();
   cmd->add_option("--width", options->width, "Image width (px, even)")->capture_default_str();

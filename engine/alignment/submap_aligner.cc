@@ -39,6 +39,7 @@ void AlignerOptions::Check() const {
   CheckInRange("AlignerOptions.min_relative_score", min_relative_score, 0.0, 1.0);
   CheckGreater("AlignerOptions.max_scale_disagreement", max_scale_disagreement, 1.0);
   CheckGreaterEqual("AlignerOptions.local_window", local_window, 0);
+  CheckGreaterEqual("AlignerOptions.max_demotable_submaps", max_demotable_submaps, 0);
 }
 
 SubmapAligner::SubmapAligner(const VocabularyTree& vocabulary, const AlignerOptions& options,
@@ -48,7 +49,7 @@ SubmapAligner::SubmapAligner(const VocabularyTree& vocabulary, const AlignerOpti
       submaps_root_(std::move(submaps_root)),
       cancel_(std::move(cancel)),
       database_(vocabulary),
-      graph_(options.graph),
+      graph_(std::make_unique<SubmapGraph>(options.graph)),
       snapshot_(std::make_shared<MapSnapshot>()) {
   options_.Check();
 }
@@ -89,7 +90,7 @@ void SubmapAligner::Add(const Submap& submap) {
     PlaceInMain(submap, verified);
     const GraphSolveSummary summary = OptimizeAfterAdd();
     GLAM_LOG_DEBUG("graph after submap {}: {} submaps, {} landmarks, {} iterations, cost {:.4g} -> {:.4g}, {:.3f} s",
-                   submap.id, graph_.num_submaps(), graph_.num_landmarks(), summary.iterations,
+                   submap.id, graph_->num_submaps(), graph_->num_landmarks(), summary.iterations,
                    summary.initial_cost, summary.final_cost, summary.seconds);
   } else {
     PlacePending(submap, verified);
@@ -231,6 +232,7 @@ void SubmapAligner::PlacePending(const Submap& submap, const std::vector<Verifie
     nodes_.at(submap.id).component = component;
     GLAM_LOG_WARN("submap {} could not be linked to the map: kept as disconnected (component {})",
                   submap.id, component);
+    PromoteIfLarger(component);
     return;
   }
   // Join the pending component of the best edge; merge any other pending component it links.
@@ -259,6 +261,50 @@ void SubmapAligner::PlacePending(const Submap& submap, const std::vector<Verifie
     }
     into.edges.push_back(v);
   }
+  PromoteIfLarger(target);
+}
+
+std::size_t SubmapAligner::FramesOf(int component) const {
+  std::size_t frames = 0;
+  for (const auto& [id, node] : nodes_) {
+    if (node.component == component) frames += node.frames;
+  }
+  return frames;
+}
+
+void SubmapAligner::PromoteIfLarger(int component) {
+  if (graph_order_.size() > static_cast<std::size_t>(options_.max_demotable_submaps)) return;
+  const std::size_t frames = FramesOf(component);
+  const std::size_t main_frames = FramesOf(0);
+  if (frames <= main_frames) return;
+  PendingComponent promoted = std::move(pending_.at(component));
+  pending_.erase(component);
+
+  // The old main map becomes a disconnected part, placed as it was.
+  PendingComponent demoted;
+  for (std::uint32_t id : graph_order_) demoted.component_from_submap[id] = graph_->world_from_submap(id);
+  demoted.edges = std::move(main_edges_);
+  const int demoted_component = next_component_++;
+  for (const auto& [id, unused] : demoted.component_from_submap) nodes_.at(id).component = demoted_component;
+
+  // The promoted part starts a new graph, its first submap levelled as the world frame.
+  graph_ = std::make_unique<SubmapGraph>(options_.graph);
+  graph_order_.clear();
+  main_edges_.clear();
+  edges_.clear();
+  const std::uint32_t first = promoted.component_from_submap.begin()->first;
+  const LevelingResult level = LevelSubmap(ReadSubmap(submaps_root_, first), options_.leveling);
+  const Sim3 world_from_component = level.world_from_submap * promoted.component_from_submap.at(first).Inverse();
+  for (const auto& [id, component_from_submap] : promoted.component_from_submap) {
+    AddToGraph(id, world_from_component * component_from_submap);
+  }
+  for (const VerifiedEdge& edge : promoted.edges) AddEdgeToGraph(edge);
+  graph_->Optimize(cancel_);
+  demoted.world_from_component = Sim3();  // display: where it was, in the old world frame
+  pending_[demoted_component] = std::move(demoted);
+  GLAM_LOG_WARN("{} disconnected submaps pose {} frames, the map {}: they become the map (world frame = "
+                "submap {} levelled), the previous map is kept as disconnected (component {})",
+                promoted.component_from_submap.size(), frames, main_frames, first, demoted_component);
 }
 
 void SubmapAligner::JoinMain(int component, const Sim3& world_from_component) {
@@ -275,30 +321,35 @@ void SubmapAligner::JoinMain(int component, const Sim3& world_from_component) {
 void SubmapAligner::AddToGraph(std::uint32_t id, const Sim3& world_from_submap) {
   Node& node = nodes_.at(id);
   node.component = 0;
-  graph_.AddSubmap(id, world_from_submap, node.depth_scale);
+  graph_->AddSubmap(id, world_from_submap, node.depth_scale);
   graph_order_.push_back(id);
+  if (graph_order_.size() > static_cast<std::size_t>(options_.max_demotable_submaps)) {
+    main_edges_.clear();
+    main_edges_.shrink_to_fit();
+  }
 }
 
 void SubmapAligner::AddEdgeToGraph(const VerifiedEdge& edge) {
-  graph_.AddEdge(edge.edge.reference, edge.edge.query, edge.pairs);
+  graph_->AddEdge(edge.edge.reference, edge.edge.query, edge.pairs);
   edges_.push_back(edge.edge);
+  if (graph_order_.size() <= static_cast<std::size_t>(options_.max_demotable_submaps)) main_edges_.push_back(edge);
   touched_this_add_.insert(edge.edge.reference);
   touched_this_add_.insert(edge.edge.query);
 }
 
 GraphSolveSummary SubmapAligner::OptimizeAfterAdd() {
   const auto window = static_cast<std::size_t>(options_.local_window);
-  if (window == 0 || joined_this_add_ || graph_order_.size() <= window) return graph_.Optimize(cancel_);
+  if (window == 0 || joined_this_add_ || graph_order_.size() <= window) return graph_->Optimize(cancel_);
   const std::set<std::uint32_t> recent(graph_order_.end() - static_cast<std::ptrdiff_t>(window), graph_order_.end());
   for (std::uint32_t id : touched_this_add_) {
-    if (!recent.contains(id)) return graph_.Optimize(cancel_);  // a loop closure: all of it
+    if (!recent.contains(id)) return graph_->Optimize(cancel_);  // a loop closure: all of it
   }
-  return graph_.OptimizeSubset(recent, cancel_);
+  return graph_->OptimizeSubset(recent, cancel_);
 }
 
 Sim3 SubmapAligner::CurrentWorldFromSubmap(std::uint32_t id) const {
   const Node& node = nodes_.at(id);
-  if (node.component == 0) return graph_.world_from_submap(id);
+  if (node.component == 0) return graph_->world_from_submap(id);
   const PendingComponent& pending = pending_.at(node.component);
   return pending.world_from_component * pending.component_from_submap.at(id);
 }
@@ -350,7 +401,7 @@ nlohmann::json SubmapAligner::GraphJson() const {
                      {"from_from_to", MatrixRows(e.reference_from_query)}});
   }
   return {{"revision", snap->revision},
-          {"graph_landmarks", graph_.num_landmarks()},
+          {"graph_landmarks", graph_->num_landmarks()},
           {"nodes", nodes},
           {"edges", edges}};
 }

@@ -59,6 +59,16 @@ struct AlignerOptions {
   // disconnected part joining, re-optimises the whole graph. 0 = always the whole graph (the
   // paper). Keeps thread 2's cost per submap flat on long flights.
   int local_window = 8;
+  // The map is the part that holds the most video. While the main map (the first submap's
+  // part, in the graph) has at most this many submaps, a disconnected part that poses more
+  // frames takes its place: it enters the graph with its own edges, its first submap levelled
+  // as the world frame, and the old main map becomes a disconnected part (re-joining when a
+  // later submap links them). Why: a flight whose first submap is a short fragment (a gimbal
+  // tilting down from the horizon at the start, measured: 59 frames, then tracking lost)
+  // would otherwise export that fragment and leave the other 541 frames out as disconnected.
+  // The main map's edges are kept for this (with their correspondences) only while it is
+  // this small. 0 = the first submap's part stays the map (the paper's world frame).
+  int max_demotable_submaps = 4;
   SubmapGraphOptions graph;
   LevelingOptions leveling;
 
@@ -106,7 +116,7 @@ class SubmapAligner {
   // For reports, after the last Add.
   const std::vector<AlignmentEdge>& edges() const { return edges_; }
   const std::vector<SubmapAlignmentTiming>& timings() const { return timings_; }
-  std::size_t graph_landmarks() const { return graph_.num_landmarks(); }
+  std::size_t graph_landmarks() const { return graph_->num_landmarks(); }
   // graph.json: nodes (placement, frames, disconnected), edges (kind, score, inliers, Sim3).
   nlohmann::json GraphJson() const;
 
@@ -133,6 +143,9 @@ class SubmapAligner {
   void PlaceInMain(const Submap& submap, const std::vector<VerifiedEdge>& verified);
   void PlacePending(const Submap& submap, const std::vector<VerifiedEdge>& verified);
   void JoinMain(int component, const Sim3& world_from_component);
+  // max_demotable_submaps: swaps `component` with the main map if it poses more frames.
+  void PromoteIfLarger(int component);
+  std::size_t FramesOf(int component) const;
   void AddToGraph(std::uint32_t id, const Sim3& world_from_submap);
   void AddEdgeToGraph(const VerifiedEdge& edge);
   // Whole graph or the local window, by what the current Add() changed (see local_window).
@@ -145,13 +158,16 @@ class SubmapAligner {
   std::filesystem::path submaps_root_;
   CancellationToken cancel_;
   SubmapDatabase database_;
-  SubmapGraph graph_;
+  std::unique_ptr<SubmapGraph> graph_;  // the main map (replaced when a larger part is promoted)
   std::map<std::uint32_t, Node> nodes_;
   std::map<int, PendingComponent> pending_;
   int next_component_ = 1;
   std::optional<Submap> previous_;  // the temporal neighbour of the next submap
   std::vector<AlignmentEdge> edges_;
   std::vector<std::uint32_t> graph_order_;     // submaps in the order they joined the graph
+  // The main map's edges with their correspondences while it may still be demoted
+  // (max_demotable_submaps); cleared and no longer kept once it has grown past that.
+  std::vector<VerifiedEdge> main_edges_;
   std::set<std::uint32_t> touched_this_add_;   // submaps an edge added by this Add() links
   bool joined_this_add_ = false;               // a pending component joined in this Add()
   std::vector<SubmapAlignmentTiming> timings_;

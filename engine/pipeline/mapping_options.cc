@@ -50,6 +50,7 @@ void UsePaperMethod(MappingOptions* options) {
   submap.bundle_adjustment.refine_k1 = false;
   options->alignment.use_shared_frames = false;
   options->alignment.local_window = 0;
+  options->alignment.max_demotable_submaps = 0;
 }
 
 void UseCalibration(MappingOptions* options, const Intrinsics& intrinsics) {

@@ -29,10 +29,10 @@ double SubmapBuilder::CameraChangeSinceSubmapStart() const {
 bool SubmapBuilder::RebuildIfCameraMoved(std::vector<Submap>* completed) {
   if (open_.rebuilds >= options_.max_submap_rebuilds || open_.start_focal <= 0) return false;
   // The decisions on the camera model are taken once, on the job's first submap: one taken
-  // after a submap was emitted would make the map's submaps disagree on the camera (a first
-  // submap closed by a tracking loss skips them, and so does a resumed run, which continues
-  // with the decisions of the interrupted one).
-  const bool first_submap = next_submap_id_ == 0;
+  // after a submap was emitted would make the map's submaps disagree on the camera (except
+  // after a fragment, CameraDecidingSubmap; a resumed run continues with the decisions of the
+  // interrupted one).
+  const bool first_submap = camera_decisions_open_;
   const BundleAdjustmentOptions& ba = options_.bundle_adjustment;
   if (!(ba.refine_focal || ba.refine_k1) || options_.rebuild_focal_change <= 0) return false;
   // The replay goes through the normal per-frame path, so it may complete this submap (and
@@ -70,6 +70,10 @@ bool SubmapBuilder::RebuildIfCameraMoved(std::vector<Submap>* completed) {
   return track_again();
 }
 
+bool SubmapBuilder::CameraDecidingSubmap() const {
+  return finishing_ || 2 * static_cast<int>(open_.keyframes.size()) >= options_.keyframes_per_submap;
+}
+
 double SubmapBuilder::AdjustedCopyRms(const Intrinsics& camera, const BundleAdjustmentOptions& ba,
                                       std::optional<double> focal) {
   std::vector<Keyframe> keyframes = open_.keyframes;
@@ -100,15 +104,15 @@ double SubmapBuilder::FocalProfileRmsIncrease() {
   }
   const double increase = rms[0] > 0 ? std::min(rms[1], rms[2]) / rms[0] - 1.0
                                      : std::numeric_limits<double>::infinity();
-  GLAM_LOG_INFO("focal profile of the first submap ({} keyframes): rms {:.4f} px at {:.1f} px, "
+  GLAM_LOG_INFO("focal profile of submap {} ({} keyframes): rms {:.4f} px at {:.1f} px, "
                 "{:+.3f} % at {:.1f} px, {:+.3f} % at {:.1f} px",
-                open_.keyframes.size(), rms[0], focal_, 100.0 * (rms[1] / rms[0] - 1.0), scales[1] * focal_,
+                next_submap_id_, open_.keyframes.size(), rms[0], focal_, 100.0 * (rms[1] / rms[0] - 1.0), scales[1] * focal_,
                 100.0 * (rms[2] / rms[0] - 1.0), scales[2] * focal_);
   return increase;
 }
 
 std::optional<bool> SubmapBuilder::DecideK1() {
-  if (next_submap_id_ != 0 || !options_.bundle_adjustment.refine_k1 || stats_.k1_profile_rms_increase ||
+  if (!camera_decisions_open_ || !options_.bundle_adjustment.refine_k1 || stats_.k1_profile_rms_increase ||
       options_.k1_profile_min_rms_increase <= 0) {
     return std::nullopt;
   }
@@ -144,9 +148,9 @@ double SubmapBuilder::K1ProfileRmsIncrease() {
     rms[i] = AdjustedCopyRms(camera, ba, std::nullopt);  // the keyframes' own focals
   }
   const double increase = rms[0] > 0 ? rms[1] / rms[0] - 1.0 : std::numeric_limits<double>::infinity();
-  GLAM_LOG_INFO("k1 profile of the first submap ({} keyframes): rms {:.4f} px at k1 {:+.4f}, {:+.3f} % at "
+  GLAM_LOG_INFO("k1 profile of submap {} ({} keyframes): rms {:.4f} px at k1 {:+.4f}, {:+.3f} % at "
                 "the initial {:+.4f}",
-                open_.keyframes.size(), rms[0], k1s[0], 100.0 * increase, k1s[1]);
+                next_submap_id_, open_.keyframes.size(), rms[0], k1s[0], 100.0 * increase, k1s[1]);
   return increase;
 }
 

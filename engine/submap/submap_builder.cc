@@ -36,6 +36,7 @@ Camera SubmapBuilder::CurrentCamera() const {
 void SubmapBuilder::ResumeAt(std::uint32_t next_submap_id, bool focal_held, bool k1_held) {
   GLAM_CHECK(stats_.frames_seen == 0, "ResumeAt after frames were added");
   next_submap_id_ = next_submap_id;
+  if (next_submap_id > 0) camera_decisions_open_ = false;  // taken by the interrupted run
   if (focal_held && options_.bundle_adjustment.refine_focal) HoldInitialFocal();
   if (k1_held && options_.bundle_adjustment.refine_k1) HoldInitialK1();
 }

@@ -156,8 +156,15 @@ class SubmapBuilder {
   void HoldInitialK1();
   // On the job's first submap, once, while k1 is refined: the k1 profile, and HoldInitialK1()
   // when it says the images do not ask for the estimate. Returns whether it held k1, nullopt
-  // when it did not decide (already decided, not the first submap, k1 not refined).
+  // when it did not decide (already decided, decisions closed, k1 not refined).
   std::optional<bool> DecideK1();
+  // Whether the open submap, about to be completed, takes the camera decisions: the first one
+  // with at least half of keyframes_per_submap keyframes (or the one open at the end of the
+  // input). A shorter first submap closed by a tracking loss is a fragment (measured: a
+  // gimbal tilting down from near the horizon at the start, 5 keyframes over 59 frames, whose
+  // k1 profile then held k1 and whose focal ended 4.4 % off for the whole flight): the
+  // decisions wait for the next submap.
+  bool CameraDecidingSubmap() const;
   // Starts a new open submap at frames.front() (its `rebuilds` count set) and feeds the other
   // frames, kept in memory, through Process() again, forgetting their earlier poses. Shared by
   // the overlap hand-off and the rebuild.
@@ -212,6 +219,9 @@ class SubmapBuilder {
   bool extending_tail_ = false;  // replaying previous_tail_: no completion by keyframe count
   bool finishing_ = false;  // end of input: bootstrap accepts any frame with enough parallax
   std::uint32_t next_submap_id_ = 0;
+  // The camera decisions (focal and k1 profiles) are still to be taken: until the first
+  // submap that is not a fragment is emitted (CameraDecidingSubmap), and never in a resumed run.
+  bool camera_decisions_open_ = true;
   SubmapBuilderStats stats_;
 };
 

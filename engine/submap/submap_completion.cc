@@ -174,11 +174,14 @@ Submap SubmapBuilder::Complete() {
   RelocaliseFrames(refined);
   CheckFixedFocal();
   // A first submap closed without the camera decisions (by a tracking loss, or out of rebuilds)
-  // still decides on k1, for the submaps after it; it keeps the k1 it was built with.
-  DecideK1();
+  // still decides on k1, for the submaps after it; it keeps the k1 it was built with. A
+  // fragment leaves the decisions to the next submap (CameraDecidingSubmap).
+  const bool deciding = camera_decisions_open_ && CameraDecidingSubmap();
+  if (deciding) DecideK1();
 
   Submap submap;
   submap.id = next_submap_id_++;
+  if (deciding) camera_decisions_open_ = false;
   submap.intrinsics = camera.intrinsics();
   submap.keyframes = open_.keyframes;
   submap.landmarks = open_.landmarks;

@@ -137,12 +137,14 @@ TEST(MappingOptions, PaperMethodTurnsTheDeviationsOff) {
   EXPECT_FALSE(paper.submap.extend_short_final_submap);
   EXPECT_FALSE(paper.alignment.use_shared_frames);
   EXPECT_EQ(paper.alignment.local_window, 0);
+  EXPECT_EQ(paper.alignment.max_demotable_submaps, 0);
   // The defaults do deviate (else the preset would be a no-op), and the paper's own
   // parameters are untouched.
   EXPECT_NE(defaults.detection_interval, 1);
   EXPECT_GT(defaults.sift.grid_cols, 0);
   EXPECT_GT(defaults.submap.completion_ba_max_frames, 0);
   EXPECT_GT(defaults.submap.min_map_coverage, 0.0);
+  EXPECT_GT(defaults.alignment.max_demotable_submaps, 0);
   EXPECT_EQ(paper.submap.tau_resection, defaults.submap.tau_resection);
   EXPECT_EQ(paper.submap.tau_stereo, defaults.submap.tau_stereo);
   EXPECT_EQ(paper.submap.keyframes_per_submap, defaults.submap.keyframes_per_submap);

@@ -326,6 +326,32 @@ TEST(SynthTrajectory, ClimbRisesStraightUpThenFliesThePath) {
   EXPECT_FALSE(SynthOptions().ToJson().contains("climb_from"));  // older clips stay up to date
 }
 
+// Gimbal tilt at the start: the camera eases from tilt_from_deg to pitch_deg over tilt_seconds.
+TEST(SynthTrajectory, GimbalTiltEasesToThePitch) {
+  SynthOptions o;
+  EXPECT_DOUBLE_EQ(o.PitchDegAt(0.0), 0.0);  // no tilt: the pitch throughout
+  o.pitch_deg = 10;
+  o.tilt_from_deg = 70;
+  o.tilt_seconds = 4;
+  EXPECT_DOUBLE_EQ(o.PitchDegAt(0.0), 70.0);
+  EXPECT_NEAR(o.PitchDegAt(2.0), 40.0, 1e-9);  // halfway at half time (raised cosine)
+  EXPECT_DOUBLE_EQ(o.PitchDegAt(4.0), 10.0);
+  EXPECT_DOUBLE_EQ(o.PitchDegAt(9.0), 10.0);
+  double last = 71;
+  for (double t = 0; t < 5; t += 0.05) {
+    EXPECT_LE(o.PitchDegAt(t), last);
+    last = o.PitchDegAt(t);
+  }
+  EXPECT_TRUE(o.ToJson().contains("tilt_from_deg"));
+  EXPECT_FALSE(SynthOptions().ToJson().contains("tilt_from_deg"));
+  // The rendered camera: its optical axis 70 deg from straight down at the first frame.
+  o.frames = 10;
+  o.wobble_deg = 0;
+  const std::vector<SE3> poses = MakeTrajectory(o, Terrain(o));
+  const Eigen::Vector3d axis = poses.front().rotation().matrix().col(2);
+  EXPECT_NEAR(std::acos(-axis.z()) * 180 / std::numbers::pi, 70.0, 1e-6);
+}
+
 TEST(SynthFiles, ClipFilesExistParseAndMatch) {
   SynthOptions o = SmallOptions();
   o.out = (fs::path(testing::TempDir()) / "glam_synth_files").string();
@@ -424,6 +450,8 @@ TEST(SynthOptions, CheckRejectsNonsense) {
   rejects([](SynthOptions& o) { o.climb_from = 5; });           // roofs too close
   rejects([](SynthOptions& o) { o.climb_from = o.altitude; });  // nothing to climb
   rejects([](SynthOptions& o) { o.climb_from = 30; o.climb_speed = 0; });
+  rejects([](SynthOptions& o) { o.tilt_seconds = 4; o.tilt_from_deg = 85; });  // beyond the renderer's 80
+  rejects([](SynthOptions& o) { o.tilt_seconds = -1; });
   EXPECT_THROW(ParseTrajectoryKind("zigzag"), InputError);
   EXPECT_EQ(ParseTrajectoryKind("orbit"), TrajectoryKind::kOrbit);
 }

@@ -44,6 +44,12 @@ double SynthOptions::ClimbSeconds() const {
   return (altitude - climb_from) / climb_speed + ClimbRampSeconds();
 }
 
+double SynthOptions::PitchDegAt(double t) const {
+  if (tilt_seconds <= 0 || t >= tilt_seconds) return pitch_deg;
+  const double u = std::max(0.0, t) / tilt_seconds;
+  return pitch_deg + (tilt_from_deg - pitch_deg) * 0.5 * (1 + std::cos(std::numbers::pi * u));
+}
+
 void SynthOptions::Check() const {
   CheckInRange("synth.altitude", altitude, 20.0, 1000.0);
   CheckInRange("synth.pitch_deg", pitch_deg, 0.0, 80.0);
@@ -61,6 +67,8 @@ void SynthOptions::Check() const {
     CheckInRange("synth.climb_from", climb_from, 10.0, altitude - 1.0);
     CheckInRange("synth.climb_speed", climb_speed, 0.5, 20.0);
   }
+  CheckInRange("synth.tilt_seconds", tilt_seconds, 0.0, 600.0);
+  if (tilt_seconds > 0) CheckInRange("synth.tilt_from_deg", tilt_from_deg, 0.0, 80.0);
   CheckInRange("synth.fps", fps, 1.0, 240.0);
   CheckInRange("synth.frames", frames, 1, 1000000);
   CheckInRange("synth.width", width, 16, 7680);
@@ -117,6 +125,10 @@ nlohmann::json SynthOptions::ToJson() const {
   if (climb_from > 0) {
     j["climb_from"] = climb_from;
     j["climb_speed"] = climb_speed;
+  }
+  if (tilt_seconds > 0) {
+    j["tilt_from_deg"] = tilt_from_deg;
+    j["tilt_seconds"] = tilt_seconds;
   }
   return j;
 }

@@ -38,6 +38,11 @@ struct SynthOptions {
   // image centre to most at the edges, and the ground sample distance changes several-fold.
   double climb_from = 0.0;    // metres above ground at the first frame; 0 = no climb
   double climb_speed = 5.0;   // m/s upwards
+  // Gimbal tilt at the start, as pilots look ahead before pointing the camera down: the camera
+  // starts `tilt_from_deg` from nadir and eases to `pitch_deg` over the first `tilt_seconds`
+  // of the clip (a rotation about the image's horizontal axis, while the drone climbs or flies).
+  double tilt_from_deg = 0.0;
+  double tilt_seconds = 0.0;  // 0 = no tilt
   double fps = 30.0;
   int frames = 600;
 
@@ -66,6 +71,8 @@ struct SynthOptions {
   // one). The path is flown from ClimbSeconds() on.
   double ClimbRampSeconds() const;
   double ClimbSeconds() const;
+  // Camera tilt from nadir (deg) at time t: tilt_from_deg eased to pitch_deg over tilt_seconds.
+  double PitchDegAt(double t) const;
 
   // Focal length actually used (resolves focal == 0).
   double EffectiveFocal() const;

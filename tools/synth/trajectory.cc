@@ -288,7 +288,7 @@ std::vector<SE3> MakeTrajectory(const SynthOptions& o, const TerrainFn& terrain)
     const double a = s - k;
     const double z = (1 - a) * ground[k] + a * ground[k + 1] + ProgressAt(o, t).height;
     const double psi = heading[f] + Wobble(t, wobble, phases[0], phases[1]);
-    const double pitch = o.pitch_deg * kDeg + Wobble(t, wobble, phases[2], phases[3]);
+    const double pitch = o.PitchDegAt(t) * kDeg + Wobble(t, wobble, phases[2], phases[3]);
     const double roll = Wobble(t, wobble, phases[4], phases[5]);
     poses.emplace_back(CameraRotation(psi, pitch, roll), Eigen::Vector3d(xy[f].x(), xy[f].y(), z));
   }
