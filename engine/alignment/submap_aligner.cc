@@ -216,6 +216,7 @@ void SubmapAligner::PlaceInMain(const Submap& submap, const std::vector<Verified
     const Sim3 world_from_reference = world_from_submap * link->edge.reference_from_query.Inverse();
     const Sim3 world_from_component =
         world_from_reference * pending.component_from_submap.at(link->edge.reference).Inverse();
+    GLAM_LOG_INFO("{} disconnected submaps joined the map", pending.component_from_submap.size());
     JoinMain(component, world_from_component);
   }
   for (const VerifiedEdge* v : deferred) AddEdgeToGraph(*v);
@@ -277,34 +278,32 @@ void SubmapAligner::PromoteIfLarger(int component) {
   const std::size_t frames = FramesOf(component);
   const std::size_t main_frames = FramesOf(0);
   if (frames <= main_frames) return;
-  PendingComponent promoted = std::move(pending_.at(component));
-  pending_.erase(component);
+  // The promoted part's first submap, levelled, becomes the world frame.
+  const PendingComponent& promoted = pending_.at(component);
+  const std::size_t promoted_submaps = promoted.component_from_submap.size();
+  const std::uint32_t first = promoted.component_from_submap.begin()->first;
+  const LevelingResult level = LevelSubmap(ReadSubmap(submaps_root_, first), options_.leveling);
+  const Sim3 world_from_component = level.world_from_submap * promoted.component_from_submap.at(first).Inverse();
 
-  // The old main map becomes a disconnected part, placed as it was.
+  // The old main map becomes a disconnected part, displayed where it was (in the old world
+  // frame: world_from_component stays the identity).
   PendingComponent demoted;
   for (std::uint32_t id : graph_order_) demoted.component_from_submap[id] = graph_->world_from_submap(id);
   demoted.edges = std::move(main_edges_);
   const int demoted_component = next_component_++;
   for (const auto& [id, unused] : demoted.component_from_submap) nodes_.at(id).component = demoted_component;
+  pending_[demoted_component] = std::move(demoted);
 
-  // The promoted part starts a new graph, its first submap levelled as the world frame.
+  // The promoted part joins a new, empty graph.
   graph_ = std::make_unique<SubmapGraph>(options_.graph);
   graph_order_.clear();
   main_edges_.clear();
   edges_.clear();
-  const std::uint32_t first = promoted.component_from_submap.begin()->first;
-  const LevelingResult level = LevelSubmap(ReadSubmap(submaps_root_, first), options_.leveling);
-  const Sim3 world_from_component = level.world_from_submap * promoted.component_from_submap.at(first).Inverse();
-  for (const auto& [id, component_from_submap] : promoted.component_from_submap) {
-    AddToGraph(id, world_from_component * component_from_submap);
-  }
-  for (const VerifiedEdge& edge : promoted.edges) AddEdgeToGraph(edge);
+  JoinMain(component, world_from_component);
   graph_->Optimize(cancel_);
-  demoted.world_from_component = Sim3();  // display: where it was, in the old world frame
-  pending_[demoted_component] = std::move(demoted);
   GLAM_LOG_WARN("{} disconnected submaps pose {} frames, the map {}: they become the map (world frame = "
                 "submap {} levelled), the previous map is kept as disconnected (component {})",
-                promoted.component_from_submap.size(), frames, main_frames, first, demoted_component);
+                promoted_submaps, frames, main_frames, first, demoted_component);
 }
 
 void SubmapAligner::JoinMain(int component, const Sim3& world_from_component) {
@@ -315,7 +314,6 @@ void SubmapAligner::JoinMain(int component, const Sim3& world_from_component) {
   }
   for (const VerifiedEdge& edge : pending.edges) AddEdgeToGraph(edge);
   joined_this_add_ = true;
-  GLAM_LOG_INFO("{} disconnected submaps joined the map", pending.component_from_submap.size());
 }
 
 void SubmapAligner::AddToGraph(std::uint32_t id, const Sim3& world_from_submap) {

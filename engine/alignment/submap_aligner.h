@@ -142,6 +142,8 @@ class SubmapAligner {
   std::vector<VerifiedEdge> VerifyCandidates(const Submap& submap, SubmapAlignmentTiming* timing);
   void PlaceInMain(const Submap& submap, const std::vector<VerifiedEdge>& verified);
   void PlacePending(const Submap& submap, const std::vector<VerifiedEdge>& verified);
+  // Moves pending `component` (its submaps, placed by world_from_component, and its internal
+  // edges) into the graph: when a submap links it to the map, and by PromoteIfLarger.
   void JoinMain(int component, const Sim3& world_from_component);
   // max_demotable_submaps: swaps `component` with the main map if it poses more frames.
   void PromoteIfLarger(int component);
