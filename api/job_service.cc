@@ -63,6 +63,30 @@ void RemoveQuietly(const fs::path& path) {
   if (ec) GLAM_LOG_WARN("cannot remove {}: {}", path.string(), ec.message());
 }
 
+// parts/<n>/trajectory.tum or parts/<n>/points.ply: a disconnected part of a completed job's
+// flight, written on its own (report.json "parts").
+fs::path PartFile(const fs::path& dir, const std::string& id, const std::string& name) {
+  constexpr std::size_t kPrefix = 6;  // "parts/"
+  const std::size_t slash = name.find('/', kPrefix);
+  const std::string file = slash == std::string::npos ? "" : name.substr(slash + 1);
+  long long number = 0;
+  if (slash == std::string::npos ||
+      !ParseNonNegativeInt(std::string_view(name).substr(kPrefix, slash - kPrefix), &number) ||
+      number < 1 || (file != "trajectory.tum" && file != "points.ply")) {
+    throw ApiError(400, "bad_request",
+                   "part files are parts/<part number>/trajectory.tum or parts/<part number>/points.ply, "
+                   "parts numbered from 1");
+  }
+  const fs::path path = dir / "parts" / std::to_string(number) / file;
+  if (!fs::is_regular_file(path)) {
+    throw ApiError(404, "not_found",
+                   fmt::format("job {} has no part {} (report.json lists the parts of the flight that "
+                               "could not be linked to the map)",
+                               id, number));
+  }
+  return path;
+}
+
 }  // namespace
 
 JobService::JobService(JobServiceOptions options) : options_(std::move(options)) {
@@ -290,12 +314,14 @@ fs::path JobService::ResultFile(const std::string& id, const std::string& name) 
   static const std::set<std::string> kWholeMap = {"trajectory.tum", "points.ply", "report.json",
                                                   "graph.json"};
   const fs::path dir = JobDir(id);
-  if (kWholeMap.count(name) != 0) {
+  const bool part = name.rfind("parts/", 0) == 0;
+  if (kWholeMap.count(name) != 0 || part) {
     if (job.state != JobState::kCompleted) {
       throw ApiError(409, "not_ready",
                      fmt::format("{} is produced when the job completes; job {} is {}", name, id,
                                  ToString(job.state)));
     }
+    if (part) return PartFile(dir, id, name);
     const fs::path path = dir / name;
     if (!fs::is_regular_file(path)) {
       throw ApiError(404, "not_found", fmt::format("job {} has no {}", id, name));

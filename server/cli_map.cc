@@ -132,7 +132,8 @@ void RegisterMapCommand(CLI::App& app) {
   auto args = std::make_shared<MapArgs>();
   CLI::App* cmd = app.add_subcommand(
       "map", "Build submaps, align them (loop closure) and write trajectory.tum, points.ply, "
-             "report.json and graph.json from a video or image folder");
+             "report.json and graph.json from a video or image folder (parts of the flight that "
+             "cannot be linked to the map: parts/<n>/trajectory.tum and points.ply)");
   cmd->add_option("input", args->input, "Video file (MP4/MOV/MKV) or folder of images")->required();
   cmd->add_option("--out", args->out, "Output directory")->required();
   cmd->add_option("--intrinsics", args->intrinsics_path,

@@ -56,6 +56,10 @@ void HandleDownload(Context& ctx, const httplib::Request& req, httplib::Response
   std::string name = file_name;
   const bool tile = name == "tiles/{submap}.glb";
   if (tile) name = "tiles/" + std::string(req.matches[2]) + ".glb";
+  constexpr std::string_view kPart = "{part}";
+  if (const std::size_t at = name.find(kPart); at != std::string::npos) {
+    name.replace(at, kPart.size(), std::string(req.matches[2]));
+  }
   // ?format=quantized: the KHR_mesh_quantization variant of a tile, or the tileset that
   // points at those variants (for standard 3D Tiles clients, which cannot read Draco points).
   const std::string format = req.get_param_value("format");

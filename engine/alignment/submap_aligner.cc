@@ -363,6 +363,10 @@ void SubmapAligner::Publish() {
     placement.disconnected = node.component != 0;
     placement.first_frame = node.first_frame;
     placement.last_frame = node.last_frame;
+    placement.part = node.component;
+    placement.part_from_submap = node.component == 0
+                                     ? placement.world_from_submap
+                                     : pending_.at(node.component).component_from_submap.at(id);
     snapshot->submaps.push_back(placement);
   }
   std::lock_guard lock(snapshot_mutex_);

@@ -20,6 +20,12 @@ struct SubmapPlacement {
   bool disconnected = false;
   std::int64_t first_frame = 0;
   std::int64_t last_frame = 0;
+  // Which disconnected part the submap belongs to (0: the map; submaps of one part share a
+  // number, which is only meaningful within this snapshot) and where it sits in that part's
+  // own frame (for the map: world_from_submap). A part's submaps are placed relative to each
+  // other by their verified edges, so each part can be exported on its own (map_export.h).
+  int part = 0;
+  Sim3 part_from_submap;
 };
 
 struct MapSnapshot {

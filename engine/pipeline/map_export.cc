@@ -1,13 +1,66 @@
 #include "engine/pipeline/map_export.h"
 
+#include <algorithm>
 #include <map>
+#include <string>
 #include <vector>
 
+#include "engine/alignment/world_leveling.h"
+#include "engine/core/error.h"
 #include "engine/export/ply_points.h"
 #include "engine/export/tum_trajectory.h"
 #include "engine/map/submap_io.h"
 
 namespace glam {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct PlacedSubmap {
+  std::uint32_t id = 0;
+  Sim3 frame_from_submap;  // into the frame of the model being written
+};
+
+struct ModelCounts {
+  std::int64_t frames_posed = 0;
+  std::int64_t points = 0;
+};
+
+// One model's trajectory.tum and points.ply from its submaps (ids ascending, so an overlap
+// frame comes from the earlier submap).
+ModelCounts WriteModel(const std::vector<PlacedSubmap>& placed, const fs::path& submaps_root,
+                       const fs::path& dir, double fps) {
+  std::map<std::int64_t, SE3> poses;  // frame index -> frame_from_cam
+  std::vector<ColoredPoint> points;
+  for (const PlacedSubmap& entry : placed) {
+    const Submap submap = ReadSubmap(submaps_root, entry.id);
+    for (const FramePose& fp : submap.frame_poses) {
+      poses.try_emplace(fp.frame_index, WorldFromCam(entry.frame_from_submap, fp.cam_from_submap));
+    }
+    points.reserve(points.size() + submap.landmarks.size());
+    for (const Landmark& lm : submap.landmarks) {
+      ColoredPoint p;
+      p.position = (entry.frame_from_submap * lm.point_in_submap).cast<float>();
+      p.color = lm.color;
+      points.push_back(p);
+    }
+  }
+  std::vector<TimedPose> timed;
+  timed.reserve(poses.size());
+  for (const auto& [index, pose] : poses) timed.push_back({static_cast<double>(index) / fps, pose});
+  WriteTumTrajectory(dir / "trajectory.tum", timed);
+  WritePlyPoints(dir / "points.ply", points);
+  return {static_cast<std::int64_t>(poses.size()), static_cast<std::int64_t>(points.size())};
+}
+
+// A part's frame: its first submap levelled, like the world frame of the map.
+Sim3 LevelledFromPart(const std::vector<const SubmapPlacement*>& part, const fs::path& submaps_root) {
+  const SubmapPlacement& first = *part.front();
+  const LevelingResult level = LevelSubmap(ReadSubmap(submaps_root, first.id));
+  return level.world_from_submap * first.part_from_submap.Inverse();
+}
+
+}  // namespace
 
 SE3 WorldFromCam(const Sim3& world_from_submap, const SE3& cam_from_submap) {
   const SE3 submap_from_cam = cam_from_submap.Inverse();
@@ -15,33 +68,62 @@ SE3 WorldFromCam(const Sim3& world_from_submap, const SE3& cam_from_submap) {
              world_from_submap * submap_from_cam.translation());
 }
 
-MapExportCounts ExportWorldMap(const MapSnapshot& snapshot, const std::filesystem::path& submaps_root,
-                               const std::filesystem::path& out_dir, double fps) {
+MapExportCounts ExportWorldMap(const MapSnapshot& snapshot, const fs::path& submaps_root,
+                               const fs::path& out_dir, double fps) {
   MapExportCounts counts;
-  std::map<std::int64_t, SE3> poses;  // frame index -> world_from_cam
-  std::vector<ColoredPoint> points;
-  for (const SubmapPlacement& placement : snapshot.submaps) {
-    if (placement.disconnected) continue;
-    const Submap submap = ReadSubmap(submaps_root, placement.id);
-    for (const FramePose& fp : submap.frame_poses) {
-      poses.try_emplace(fp.frame_index, WorldFromCam(placement.world_from_submap, fp.cam_from_submap));
+  std::vector<PlacedSubmap> map;
+  std::map<int, std::vector<const SubmapPlacement*>> parts;  // part -> submaps, ids ascending
+  std::vector<const SubmapPlacement*> sorted;
+  for (const SubmapPlacement& placement : snapshot.submaps) sorted.push_back(&placement);
+  std::sort(sorted.begin(), sorted.end(),
+            [](const SubmapPlacement* a, const SubmapPlacement* b) { return a->id < b->id; });
+  for (const SubmapPlacement* placement : sorted) {
+    if (placement->disconnected) {
+      parts[placement->part].push_back(placement);
+    } else {
+      map.push_back({placement->id, placement->world_from_submap});
     }
-    points.reserve(points.size() + submap.landmarks.size());
-    for (const Landmark& lm : submap.landmarks) {
-      ColoredPoint p;
-      p.position = (placement.world_from_submap * lm.point_in_submap).cast<float>();
-      p.color = lm.color;
-      points.push_back(p);
-    }
-    ++counts.submaps_exported;
   }
-  std::vector<TimedPose> timed;
-  timed.reserve(poses.size());
-  for (const auto& [index, pose] : poses) timed.push_back({static_cast<double>(index) / fps, pose});
-  WriteTumTrajectory(out_dir / "trajectory.tum", timed);
-  WritePlyPoints(out_dir / "points.ply", points);
-  counts.frames_posed = static_cast<std::int64_t>(poses.size());
-  counts.points = static_cast<std::int64_t>(points.size());
+  const ModelCounts written = WriteModel(map, submaps_root, out_dir, fps);
+  counts.frames_posed = written.frames_posed;
+  counts.points = written.points;
+  counts.submaps_exported = static_cast<std::int64_t>(map.size());
+
+  // Parts, numbered by their first frame.
+  std::vector<std::vector<const SubmapPlacement*>> ordered;
+  for (auto& [unused, members] : parts) ordered.push_back(std::move(members));
+  auto first_frame = [](const std::vector<const SubmapPlacement*>& part) {
+    std::int64_t first = part.front()->first_frame;
+    for (const SubmapPlacement* p : part) first = std::min(first, p->first_frame);
+    return first;
+  };
+  std::sort(ordered.begin(), ordered.end(), [&](const auto& a, const auto& b) {
+    return first_frame(a) < first_frame(b);
+  });
+  const fs::path parts_dir = out_dir / "parts";
+  std::error_code error;
+  fs::remove_all(parts_dir, error);
+  if (error) throw EnvironmentError("cannot replace " + parts_dir.string() + ": " + error.message());
+  for (std::size_t i = 0; i < ordered.size(); ++i) {
+    const std::vector<const SubmapPlacement*>& members = ordered[i];
+    PartExport part;
+    part.number = static_cast<int>(i) + 1;
+    part.first_frame = first_frame(members);
+    const Sim3 levelled_from_part = LevelledFromPart(members, submaps_root);
+    std::vector<PlacedSubmap> placed;
+    for (const SubmapPlacement* p : members) {
+      placed.push_back({p->id, levelled_from_part * p->part_from_submap});
+      part.submaps.push_back(p->id);
+      part.last_frame = std::max(part.last_frame, p->last_frame);
+    }
+    const fs::path dir = parts_dir / std::to_string(part.number);
+    fs::create_directories(dir, error);
+    if (error) throw EnvironmentError("cannot create " + dir.string() + ": " + error.message());
+    const ModelCounts part_written = WriteModel(placed, submaps_root, dir, fps);
+    part.frames_posed = part_written.frames_posed;
+    part.points = part_written.points;
+    counts.parts.push_back(std::move(part));
+  }
   return counts;
 }
 

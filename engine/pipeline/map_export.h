@@ -2,13 +2,21 @@
 // the submaps persisted on disk. Submaps are read back one at a time, so writing the map
 // needs memory for the output, not for every submap's keyframes and descriptors at once.
 //
-// Submaps marked disconnected in the snapshot are left out: their placement is a guess, and a
-// trajectory or point cloud with pieces in the wrong place is worse than one with a gap (the
-// report counts their frames as unposed; graph.json and the tiles still have them).
+// Submaps marked disconnected in the snapshot are left out of the map's files: their
+// placement in the world is a guess, and a trajectory or point cloud with pieces in the wrong
+// place is worse than one with a gap (the report counts their frames as unposed; graph.json
+// and the tiles still have them). Each disconnected *part* (submaps linked to each other but
+// not to the map, e.g. the flight after a tracking loss over water that never revisits
+// earlier ground) is written on its own instead, in its own frame: parts/<n>/trajectory.tum
+// and parts/<n>/points.ply, n = 1, 2, ... in order of the part's first frame. Its frame is
+// built like the world frame (its first submap levelled), at its own scale: a part shares
+// nothing with the map, so COLMAP-style separate models are all that can be said of it, and
+// dropping it would lose what the video showed.
 #pragma once
 
 #include <cstdint>
 #include <filesystem>
+#include <vector>
 
 #include "engine/core/se3.h"
 #include "engine/core/sim3.h"
@@ -21,14 +29,27 @@ namespace glam {
 // camera centre (the camera's world position).
 SE3 WorldFromCam(const Sim3& world_from_submap, const SE3& cam_from_submap);
 
-struct MapExportCounts {
-  std::int64_t frames_posed = 0;  // distinct frames in trajectory.tum
+// One disconnected part written to parts/<number>/.
+struct PartExport {
+  int number = 0;                      // 1-based, in order of first_frame
+  std::vector<std::uint32_t> submaps;  // ids, ascending
+  std::int64_t first_frame = 0;
+  std::int64_t last_frame = 0;
+  std::int64_t frames_posed = 0;  // distinct frames in its trajectory.tum
   std::int64_t points = 0;
-  std::int64_t submaps_exported = 0;
+};
+
+struct MapExportCounts {
+  std::int64_t frames_posed = 0;  // distinct frames in trajectory.tum (the map only)
+  std::int64_t points = 0;
+  std::int64_t submaps_exported = 0;  // submaps of the map
+  std::vector<PartExport> parts;
 };
 
 // Writes trajectory.tum (t = frame index / fps; a frame posed by two submaps, i.e. in an
-// overlap, is written once, from the earlier submap) and points.ply into out_dir.
+// overlap, is written once, from the earlier submap) and points.ply into out_dir, and each
+// disconnected part into out_dir/parts/<n>/ (the parts/ folder is replaced, so a re-run never
+// leaves parts of an earlier run behind).
 MapExportCounts ExportWorldMap(const MapSnapshot& snapshot, const std::filesystem::path& submaps_root,
                                const std::filesystem::path& out_dir, double fps);
 

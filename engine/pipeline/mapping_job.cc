@@ -319,6 +319,7 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   report.submaps = static_cast<std::int64_t>(snapshot->submaps.size());
   report.submaps_discarded = stats.submaps_discarded;
   report.disconnected_submaps = report.submaps - exported.submaps_exported;
+  report.parts = exported.parts;
   report.points = exported.points;
   report.tracking_losses = stats.tracking_losses;
   report.submap_rebuilds = stats.submap_rebuilds;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include <fmt/format.h>
 
@@ -32,6 +33,20 @@ nlohmann::json AlignmentJson(const std::vector<SubmapAlignmentTiming>& timings) 
   return {{"mean_latency_s", mean}, {"max_latency_s", worst}, {"per_submap", per_submap}};
 }
 
+nlohmann::json PartsJson(const std::vector<PartExport>& parts) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const PartExport& part : parts) {
+    out.push_back({{"part", part.number},
+                   {"directory", "parts/" + std::to_string(part.number)},
+                   {"submaps", part.submaps},
+                   {"first_frame", part.first_frame},
+                   {"last_frame", part.last_frame},
+                   {"frames_posed", part.frames_posed},
+                   {"points", part.points}});
+  }
+  return out;
+}
+
 }  // namespace
 
 std::vector<std::string> Diagnose(const MappingReport& r, int min_features) {
@@ -55,6 +70,8 @@ std::vector<std::string> Diagnose(const MappingReport& r, int min_features) {
         "cannot be posed",
         r.frames_without_features, r.frames_decoded, min_features));
   }
+  std::int64_t frames_in_parts = 0;
+  for (const PartExport& part : r.parts) frames_in_parts += part.frames_posed;
   if (r.submaps == 0 && r.keyframes > 0) {
     warnings.push_back(fmt::format(
         "none of the {} frames could be posed: maps were started but none reached 3 keyframes "
@@ -66,9 +83,20 @@ std::vector<std::string> Diagnose(const MappingReport& r, int min_features) {
         "map (a static or hovering camera, or too short a clip), or consecutive frames do not "
         "overlap",
         r.frames_decoded));
-  } else if (r.frames_unposed * 10 >= r.frames_decoded) {
-    warnings.push_back(fmt::format("{} of {} frames could not be posed (see trajectory.tum)",
-                                   r.frames_unposed, r.frames_decoded));
+  } else if (std::max<std::int64_t>(0, r.frames_unposed - frames_in_parts) * 10 >= r.frames_decoded) {
+    warnings.push_back(fmt::format("{} of {} frames could not be posed (see trajectory.tum{})",
+                                   std::max<std::int64_t>(0, r.frames_unposed - frames_in_parts),
+                                   r.frames_decoded, r.parts.empty() ? "" : " and parts/"));
+  }
+  if (!r.parts.empty()) {
+    warnings.push_back(fmt::format(
+        "{} part{} of the flight ({} frames) could not be linked to the map (no overlap with "
+        "it was found, e.g. after a tracking loss over water, a hard cut or a fast turn), so "
+        "trajectory.tum and points.ply lack {}: {} written on {} own in parts/<n>/, in {} own "
+        "frame and scale",
+        r.parts.size(), r.parts.size() == 1 ? "" : "s", frames_in_parts,
+        r.parts.size() == 1 ? "it" : "them", r.parts.size() == 1 ? "it is" : "they are",
+        r.parts.size() == 1 ? "its" : "their", r.parts.size() == 1 ? "its" : "their"));
   }
   const double focal_change =
       r.free_focal_original && r.focal_original > 0 ? *r.free_focal_original / r.focal_original - 1.0 : 0.0;
@@ -105,6 +133,7 @@ nlohmann::json MappingReport::ToJson() const {
           {"submaps", submaps},
           {"submaps_discarded", submaps_discarded},
           {"disconnected_submaps", disconnected_submaps},
+          {"parts", PartsJson(parts)},
           {"points", points},
           {"tracking_losses", tracking_losses},
           {"submap_rebuilds", submap_rebuilds},

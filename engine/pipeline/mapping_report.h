@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "engine/alignment/submap_aligner.h"
+#include "engine/pipeline/map_export.h"
 
 namespace glam {
 
@@ -38,6 +39,8 @@ struct MappingReport {
   std::int64_t submaps = 0;
   std::int64_t submaps_discarded = 0;
   std::int64_t disconnected_submaps = 0;
+  // Disconnected parts, each written on its own to parts/<n>/ (map_export.h).
+  std::vector<PartExport> parts;
   std::int64_t points = 0;
   std::int64_t tracking_losses = 0;
   std::int64_t submap_rebuilds = 0;  // submaps tracked again after the focal estimate moved

@@ -189,6 +189,35 @@ TEST_F(HttpApiTest, UploadFollowEventsAndDownload) {
   EXPECT_EQ(page["jobs"][0]["id"], id);
 }
 
+// Disconnected parts of a completed job (report.json "parts", written by the engine's map
+// export to parts/<n>/) are served under /parts/<n>/; bad part names are 400, missing parts 404.
+TEST_F(HttpApiTest, DisconnectedPartsAreServedByNumber) {
+  Start({}, "parts");
+  auto client = Client();
+  const std::string id = CreateJob(client);
+  const std::string base = "/api/v1/jobs/" + id + "/";
+  FollowToEnd(client, id);
+  const fs::path part_dir = dir_ / "data" / "jobs" / id / "parts" / "1";
+  fs::create_directories(part_dir);
+  const std::string part_trajectory = "2.0 5 0 0 0 0 0 1\n";
+  std::ofstream(part_dir / "trajectory.tum") << part_trajectory;
+  std::ofstream(part_dir / "points.ply") << "ply\n";
+  auto res = client.Get(base + "parts/1/trajectory.tum");
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 200);
+  EXPECT_EQ(res->body, part_trajectory);
+  EXPECT_EQ(res->get_header_value("Content-Type"), "text/plain; charset=utf-8");
+  res = client.Get(base + "parts/1/points.ply");
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 200);
+  EXPECT_EQ(res->body, "ply\n");
+  ExpectError(client.Get(base + "parts/2/trajectory.tum"), 404, "not_found", "no such part");
+  ExpectError(client.Get(base + "parts/0/trajectory.tum"), 400, "bad_request", "parts count from 1");
+  ExpectError(client.Get(base + "parts/one/points.ply"), 400, "bad_request", "not a number");
+  ExpectError(client.Get(base + "parts/1/report.json"), 404, "", "only the part's trajectory and points");
+  ExpectError(client.Get("/api/v1/jobs/0123456789abcdef/parts/1/trajectory.tum"), 404, "not_found", "unknown job");
+}
+
 // Map tiles written by the engine's TileWriter into a job directory are served as they appear:
 // tiles immutable, tileset.json revalidated by ETag and replaced per revision, the quantized
 // variants by ?format=quantized (and under the names the quantized tileset's URIs use).
@@ -339,6 +368,7 @@ TEST_F(HttpApiTest, BadRequestCorpusGetsDocumentedStatuses) {
   WaitForHold();
   ExpectError(client.Post("/api/v1/jobs/" + id + "/restart"), 409, "invalid_state", "restart running");
   ExpectError(client.Get("/api/v1/jobs/" + id + "/trajectory.tum"), 409, "not_ready", "download running");
+  ExpectError(client.Get("/api/v1/jobs/" + id + "/parts/1/trajectory.tum"), 409, "not_ready", "part running");
   ExpectError(client.Get("/api/v1/jobs/" + id + "/events", {{"Last-Event-ID", "abc"}}), 400, "bad_request",
               "bad Last-Event-ID");
   ExpectError(client.Get("/api/v1/jobs/" + id + "/tiles/abc.glb"), 400, "bad_request", "tile name");
@@ -364,7 +394,9 @@ TEST_F(HttpApiTest, PathTraversalNeverReachesTheFileSystem) {
            "/api/v1/jobs/..%2f..%2fetc/trajectory.tum", "/api/v1/jobs/..%2F..%2F..%2Fsecret.txt",
         "/api/v1/jobs/../../secret.txt", "/api/v1/jobs/" + id + "/..%2f..%2f..%2fsecret.txt",
         "/api/v1/jobs/" + id + "/tiles/..%2f..%2fglam.db", "/api/v1/jobs/" + id + "/tiles/..%2f1.glb",
-        "/api/v1/jobs/%2e%2e/trajectory.tum", "/api/v1/jobs/" + id + "%2f..%2f..%2fglam.db"}) {
+        "/api/v1/jobs/%2e%2e/trajectory.tum", "/api/v1/jobs/" + id + "%2f..%2f..%2fglam.db",
+        "/api/v1/jobs/" + id + "/parts/..%2f..%2f..%2f/trajectory.tum",
+        "/api/v1/jobs/" + id + "/parts/%2e%2e/points.ply"}) {
     auto res = client.Get(path);
     ASSERT_TRUE(res) << path;
     EXPECT_TRUE(res->status == 400 || res->status == 404) << path << " -> " << res->status;
