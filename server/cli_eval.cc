@@ -1,12 +1,17 @@
 // `glam eval --gt DIR --result DIR [--json FILE] [--format text|json] [--no-scale] [--fps F]`
 // Prints a one-line summary (or the JSON report with --format json) on stdout; --json also
-// writes the report to a file, for benchmarks and CI.
+// writes the report to a file, for benchmarks and CI. The disconnected parts of a `glam map`
+// result (DIR/parts/<n>/, each in its own frame) are evaluated too, each aligned on its own:
+// one more line per part ("parts/<n>: ..."), and "parts" in the JSON report.
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "engine/core/error.h"
 #include "server/commands.h"
@@ -24,12 +29,44 @@ struct EvalArgs {
   eval::EvaluationOptions options;
 };
 
+// parts/<n> folders of a result directory, in part order.
+std::vector<int> PartNumbers(const std::filesystem::path& result_dir) {
+  std::vector<int> numbers;
+  std::error_code error;
+  for (const auto& entry : std::filesystem::directory_iterator(result_dir / "parts", error)) {
+    const std::string name = entry.path().filename().string();
+    if (entry.is_directory() && !name.empty() && name.size() < 9 &&
+        std::all_of(name.begin(), name.end(), [](char c) { return c >= '0' && c <= '9'; })) {
+      numbers.push_back(std::stoi(name));
+    }
+  }
+  std::sort(numbers.begin(), numbers.end());
+  return numbers;
+}
+
 void RunEval(const EvalArgs& args) {
   eval::EvaluationOptions options = args.options;
   options.trajectory.estimate_scale = !args.no_scale;
   const eval::EvaluationResult result =
       eval::EvaluateDirectories(args.gt_dir, args.result_dir, options);
-  const nlohmann::json report = eval::ToJson(result);
+  nlohmann::json report = eval::ToJson(result);
+  std::vector<std::string> part_lines;
+  nlohmann::json parts = nlohmann::json::array();
+  for (const int number : PartNumbers(args.result_dir)) {
+    const std::string directory = fmt::format("parts/{}", number);
+    nlohmann::json entry = {{"directory", directory}};
+    try {
+      const eval::EvaluationResult part =
+          eval::EvaluateDirectories(args.gt_dir, std::filesystem::path(args.result_dir) / directory, options);
+      entry.update(eval::ToJson(part));
+      part_lines.push_back(directory + ": " + eval::Summary(part));
+    } catch (const InputError& e) {  // e.g. a part of fewer than three frames
+      entry["error"] = e.what();
+      part_lines.push_back(directory + ": not evaluated: " + e.what());
+    }
+    parts.push_back(std::move(entry));
+  }
+  report["parts"] = parts;
   if (!args.json_path.empty()) {
     std::ofstream out(args.json_path);
     out << report.dump(2) << "\n";
@@ -40,6 +77,7 @@ void RunEval(const EvalArgs& args) {
     std::cout << report.dump(2) << std::endl;
   } else {
     std::cout << eval::Summary(result) << std::endl;
+    for (const std::string& line : part_lines) std::cout << line << std::endl;
   }
 }
 
@@ -48,7 +86,8 @@ void RunEval(const EvalArgs& args) {
 void RegisterEvalCommand(CLI::App& app) {
   auto args = std::make_shared<EvalArgs>();
   CLI::App* cmd = app.add_subcommand(
-      "eval", "Evaluate a trajectory (and point cloud) against synthetic ground truth");
+      "eval", "Evaluate a trajectory (and point cloud) against synthetic ground truth; the "
+              "disconnected parts of a glam map result (parts/<n>/) each on its own");
   cmd->add_option("--gt", args->gt_dir, "Ground-truth directory written by `glam synth`")
       ->required();
   cmd->add_option("--result", args->result_dir,

@@ -83,6 +83,32 @@ TEST_F(EvalCli, PrintsSummaryAndWritesJson) {
   EXPECT_GT(stdout_report["trajectory"]["ate_rmse_m"].get<double>(), 1.0);  // scale 2 kept
 }
 
+TEST_F(EvalCli, EvaluatesEachDisconnectedPartOnItsOwn) {
+  // The map: the first 60 frames; parts/1: the next 50 in a frame of their own (another
+  // scale and offset, which its own alignment removes); parts/2: two frames, too few.
+  const std::vector<TimedPose> first(gt_.begin(), gt_.begin() + 60);
+  const std::vector<TimedPose> second(gt_.begin() + 60, gt_.begin() + 110);
+  WriteTumTrajectory(result_dir_ / "trajectory.tum", first);
+  std::filesystem::create_directories(result_dir_ / "parts" / "1");
+  std::filesystem::create_directories(result_dir_ / "parts" / "2");
+  WriteTumTrajectory(result_dir_ / "parts" / "1" / "trajectory.tum",
+                     testing::TransformPoses(Sim3(0.3, SO3::Exp(Eigen::Vector3d(0, 0, 1)), Eigen::Vector3d(5, 0, 0)),
+                                             second));
+  WriteTumTrajectory(result_dir_ / "parts" / "2" / "trajectory.tum", {gt_[115], gt_[116]});
+  const RunResult r = RunGlam(scratch_, Args());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("posed 50.0% (60/120)"));
+  EXPECT_THAT(r.out, HasSubstr("parts/1: posed 41.7% (50/120) | ATE 0.000 m"));
+  EXPECT_THAT(r.out, HasSubstr("parts/2: not evaluated"));
+  const RunResult as_json = RunGlam(scratch_, Args() + " --format json");
+  ASSERT_EQ(as_json.exit_code, 0) << as_json.err;
+  const nlohmann::json report = nlohmann::json::parse(as_json.out);
+  ASSERT_EQ(report["parts"].size(), 2u);
+  EXPECT_EQ(report["parts"][0]["directory"], "parts/1");
+  EXPECT_NEAR(report["parts"][0]["alignment"]["scale"].get<double>(), 1.0 / 0.3, 1e-6);
+  EXPECT_TRUE(report["parts"][1].contains("error"));
+}
+
 TEST_F(EvalCli, MissingTrajectoryFile) {
   const RunResult r = RunGlam(scratch_, Args());
   EXPECT_EQ(r.exit_code, 2);
