@@ -9,7 +9,8 @@
 #           one; build time listed separately); 2 threads and CPU only everywhere.
 # Both results are scored by `glam eval` (COLMAP's model converted by colmap_to_glam.py).
 # Writes out/bench/colmap/table.md and the plots docs/images/bench/colmap_*.png.
-# Usage: bench/colmap/run.sh [BUILD_DIR] [VIDEOS...]   (videos: lawnmower loop oblique; default all)
+# Usage: bench/colmap/run.sh [BUILD_DIR] [VIDEOS...]   (videos: lawnmower loop oblique, default all three;
+#   also compressed)
 #   REUSE_COLMAP=1: re-run GLAM only, scoring against each video's earlier COLMAP result.
 # Needs bench/colmap/setup.sh first.
 set -euo pipefail
@@ -32,6 +33,9 @@ synth_args() {
     lawnmower) echo "--trajectory lawnmower --frames 300 --width 640 --height 360 --altitude 100 --seed 1" ;;
     loop) echo "--trajectory loop --frames 450 --fps 15 --width 640 --height 360 --altitude 40 --seed 4" ;;
     oblique) echo "--trajectory loop --frames 600 --width 640 --height 360 --altitude 60 --pitch-deg 30 --seed 21" ;;
+    # Optional (not in the default list): a loop at 100 m compressed like a re-encoded upload
+    # (H.264 CRF 24, ~410 kbit/s at 640x360), the compression both tools have to cope with.
+    compressed) echo "--trajectory loop --frames 600 --width 640 --height 360 --crf 24 --seed 49" ;;
     *) echo "unknown video $1" >&2; exit 1 ;;
   esac
 }
