@@ -176,6 +176,11 @@ void RegisterMapCommand(CLI::App& app) {
                   "Tracked frames that join each submap's final bundle adjustment; 0 = the "
                   "paper's completion (PnP relocalisation only)")
       ->capture_default_str();
+  cmd->add_option("--smooth-window", args->options.submap.centre_smoothing.half_window_s,
+                  "Camera centres are smoothed over +- this many seconds of video (a robust local "
+                  "quadratic fit; rotations re-solved), which removes the sideways jitter of "
+                  "compressed footage; 0 = per-frame PnP poses (the paper)")
+      ->capture_default_str();
   cmd->add_option("--feature-workers", args->options.feature_workers,
                   "Frames whose SIFT features are extracted in parallel")
       ->capture_default_str();
@@ -203,7 +208,8 @@ void RegisterMapCommand(CLI::App& app) {
       "feature grid, no parallax keyframe rules, per-keyframe focal, no completion bundle "
       "adjustment, ...; docs/algorithm.md); slower");
   for (const char* name : {"--detect-every", "--feature-grid", "--keyframe-parallax", "--keyframe-coverage",
-                           "--bootstrap-parallax", "--completion-ba-frames", "--per-keyframe-focal"}) {
+                           "--bootstrap-parallax", "--completion-ba-frames", "--smooth-window",
+                           "--per-keyframe-focal"}) {
     paper->excludes(name);
   }
   cmd->add_flag("--resume", args->options.resume,

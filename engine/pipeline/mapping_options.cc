@@ -43,6 +43,7 @@ void UsePaperMethod(MappingOptions* options) {
   submap.focal_prior_growth = 0;
   submap.rebuild_focal_change = 0;
   submap.completion_ba_max_frames = 0;
+  submap.centre_smoothing.half_window_s = 0;
   submap.extend_short_final_submap = false;
   submap.isolated_filter_once = false;
   submap.bootstrap_rotation_veto_fraction = 0;

@@ -198,6 +198,9 @@ class SubmapBuilder {
   // The completion bundle adjustment (SubmapOptions::completion_ba_max_frames); returns which
   // frame positions it refined.
   std::vector<bool> RefineWithTrackedFrames();
+  // SubmapOptions::centre_smoothing over the posed frames of the open submap (after the
+  // relocalisation; centre_smoothing.h).
+  void SmoothFrameCentres();
   void HandOffOverlap(std::vector<Submap>* completed);
   // SubmapOptions::check_fixed_focal, on the open submap (once per builder).
   void CheckFixedFocal();

@@ -125,6 +125,49 @@ void SubmapBuilder::RelocaliseFrames(const std::vector<bool>& keep) {
   }
 }
 
+void SubmapBuilder::SmoothFrameCentres() {
+  const CentreSmoothingOptions& options = options_.centre_smoothing;
+  if (options.half_window_s <= 0) return;
+  const Camera camera = CurrentCamera();
+  std::size_t smoothed = 0;
+  double moved = 0;
+  auto smooth_run = [&](std::size_t begin, std::size_t end) {  // posed frames [begin, end)
+    if (end - begin < static_cast<std::size_t>(options.min_frames)) return;
+    std::vector<double> times;
+    std::vector<Eigen::Vector3d> centres;
+    for (std::size_t p = begin; p < end; ++p) {
+      times.push_back(open_.frames[p].timestamp_s);
+      centres.push_back(open_.frames[p].cam_from_submap->Inverse().translation());
+    }
+    const std::vector<Eigen::Vector3d> fitted = SmoothCentres(times, centres, options);
+    for (std::size_t p = begin; p < end; ++p) {
+      FrameRecord& frame = open_.frames[p];
+      std::vector<Eigen::Vector2d> normalized;
+      std::vector<Eigen::Vector3d> points;
+      for (const auto& [feature, id] : frame.landmark_matches) {
+        if (const Landmark* lm = FindLandmark(id)) {
+          normalized.push_back(camera.Unproject(frame.features.points[feature].cast<double>()).head<2>());
+          points.push_back(lm->point_in_submap);
+        }
+      }
+      if (static_cast<int>(points.size()) < options_.min_tracking_inliers) continue;
+      SE3 pose = *frame.cam_from_submap;
+      if (!SolveRotationWithCentre(normalized, points, fitted[p - begin], &pose)) continue;
+      moved += (fitted[p - begin] - centres[p - begin]).norm();
+      frame.cam_from_submap = pose;
+      ++smoothed;
+    }
+  };
+  std::size_t run_begin = 0;
+  for (std::size_t p = 0; p <= open_.frames.size(); ++p) {
+    if (p < open_.frames.size() && open_.frames[p].cam_from_submap) continue;
+    smooth_run(run_begin, p);
+    run_begin = p + 1;
+  }
+  GLAM_LOG_DEBUG("centre smoothing: {} of {} frames, mean move {:.4f} (submap units)", smoothed,
+                 open_.frames.size(), smoothed > 0 ? moved / static_cast<double>(smoothed) : 0.0);
+}
+
 void SubmapBuilder::CheckFixedFocal() {
   // A focal held because the images do not determine it (focal profile) has nothing to check.
   if (!options_.check_fixed_focal || options_.bundle_adjustment.refine_focal || stats_.free_focal_px ||
@@ -172,6 +215,7 @@ Submap SubmapBuilder::Complete() {
     RemoveReprojectionOutliers(camera.intrinsics(), open_.keyframes, open_.landmarks, options_.outlier_filter);
   }
   RelocaliseFrames(refined);
+  SmoothFrameCentres();
   CheckFixedFocal();
   // A first submap closed without the camera decisions (by a tracking loss, or out of rebuilds)
   // still decides on k1, for the submaps after it; it keeps the k1 it was built with. A

@@ -54,6 +54,7 @@ void SubmapOptions::Check() const {
   }
   bundle_adjustment.Check();
   outlier_filter.Check();
+  centre_smoothing.Check();
 }
 
 int SubmapOptions::EffectiveTauResection(int features) const {

@@ -8,6 +8,7 @@
 #pragma once
 
 #include "engine/submap/bundle_adjuster.h"
+#include "engine/submap/centre_smoothing.h"
 #include "engine/submap/outlier_filter.h"
 
 namespace glam {
@@ -168,6 +169,10 @@ struct SubmapOptions {
   // have. 0 = the paper's completion (PnP relocalisation only). Frames are picked evenly
   // over the submap, detection frames first.
   int completion_ba_max_frames = 20;
+  // After the final relocalisation, camera centres are smoothed over time and rotations
+  // re-solved (centre_smoothing.h: compressed video makes nadir poses jump sideways).
+  // half_window_s = 0: the paper's per-frame PnP poses.
+  CentreSmoothingOptions centre_smoothing;
 
   // --- end of input ---
   // The submap open when the input ends has fewer keyframes than the others and, started at
