@@ -145,10 +145,18 @@ void SubmapBuilder::SmoothFrameCentres() {
       std::vector<Eigen::Vector2d> normalized;
       std::vector<Eigen::Vector3d> points;
       for (const auto& [feature, id] : frame.landmark_matches) {
-        if (const Landmark* lm = FindLandmark(id)) {
-          normalized.push_back(camera.Unproject(frame.features.points[feature].cast<double>()).head<2>());
-          points.push_back(lm->point_in_submap);
+        const Landmark* lm = FindLandmark(id);
+        if (lm == nullptr) continue;
+        // Only the matches the relocalised pose explains (the tracking matches were found
+        // against landmarks that have moved since).
+        const Eigen::Vector2d pixel = frame.features.points[feature].cast<double>();
+        Eigen::Vector2d projected;
+        if (!camera.Project(*frame.cam_from_submap * lm->point_in_submap, &projected) ||
+            (projected - pixel).norm() > options_.pnp_threshold_pixels) {
+          continue;
         }
+        normalized.push_back(camera.Unproject(pixel).head<2>());
+        points.push_back(lm->point_in_submap);
       }
       if (static_cast<int>(points.size()) < options_.min_tracking_inliers) continue;
       SE3 pose = *frame.cam_from_submap;
