@@ -84,16 +84,30 @@ std::vector<Eigen::Vector3d> SmoothCentres(const std::vector<double>& times_s,
   const std::size_t n = centres.size();
   std::vector<Eigen::Vector3d> out = centres;
   if (options.half_window_s <= 0 || n < 2) return out;
-  // Pieces between jumps: a step far beyond the run's typical one is no flight (a frozen
-  // stream catching up, dropped frames), and a window across it would blur it.
+  // Pieces between jumps: a step far beyond the typical steps on either side of it is no
+  // flight (a frozen stream catching up, dropped frames), and a window across it would blur
+  // it. Typical = the median step over half a window before and after (the larger): a drone
+  // that hovers, then flies off, speeds up smoothly and is no jump, whatever the video's
+  // overall median step.
   std::vector<double> steps(n - 1);
   for (std::size_t i = 0; i + 1 < n; ++i) steps[i] = (centres[i + 1] - centres[i]).norm();
-  const double jump = options.jump_factor * UpperMedian(steps);
+  auto typical_step = [&](std::size_t step) {
+    const double t = times_s[step];
+    std::vector<double> before, after;
+    for (std::size_t k = step; k-- > 0 && times_s[k] >= t - options.half_window_s;) before.push_back(steps[k]);
+    for (std::size_t k = step + 1; k + 1 < n && times_s[k + 1] <= times_s[step + 1] + options.half_window_s; ++k) {
+      after.push_back(steps[k]);
+    }
+    return std::max(before.empty() ? 0.0 : UpperMedian(before), after.empty() ? 0.0 : UpperMedian(after));
+  };
+  std::vector<double> jump(n - 1);
+  for (std::size_t i = 0; i + 1 < n; ++i) jump[i] = options.jump_factor * typical_step(i);
   // A single frame off the path and back (one wrong pose) is no jump: the robust fit replaces it.
   std::vector<bool> splits(n, false);  // splits[i]: a piece ends before frame i
-  for (std::size_t i = 1; i < n; ++i) splits[i] = steps[i - 1] > jump;
+  for (std::size_t i = 1; i < n; ++i) splits[i] = steps[i - 1] > jump[i - 1];
   for (std::size_t k = 1; k + 1 < n; ++k) {
-    if (splits[k] && splits[k + 1] && (centres[k + 1] - centres[k - 1]).norm() <= 2.0 * jump) {
+    if (splits[k] && splits[k + 1] &&
+        (centres[k + 1] - centres[k - 1]).norm() <= 2.0 * std::max(jump[k - 1], jump[k])) {
       splits[k] = splits[k + 1] = false;
     }
   }

@@ -34,9 +34,10 @@ struct CentreSmoothingOptions {
   // Neighbours further than this many robust standard deviations from the first fit are
   // left out of the second (a wrong pose must not pull its neighbours).
   double outlier_sigmas = 3.0;
-  // A step between consecutive centres longer than this many times the run's median step
-  // splits the run: measured on a stream frozen for 3 s that then jumps 30 m, smoothing
-  // across the jump made the frames around it 30 m wrong (ATE 0.09 -> 0.57 m).
+  // A step between consecutive centres longer than this many times the median step over
+  // half a window before or after it (the larger) splits the run: measured on a stream
+  // frozen for 3 s that then jumps 30 m, smoothing across the jump made the frames around it
+  // 30 m wrong (ATE 0.09 -> 0.57 m).
   double jump_factor = 8.0;
 
   void Check() const;  // throws InputError

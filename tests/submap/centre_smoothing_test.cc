@@ -78,6 +78,30 @@ TEST(CentreSmoothing, AJumpNoFlightMakesIsKept) {
   }
 }
 
+TEST(CentreSmoothing, AHoverThenAFlightIsSmoothedAsAFlight) {
+  // 8 s of hovering (a few millimetres of noise), then 2 s accelerating away at 5 m/s^2: most
+  // steps are the hover's, but taking off is no jump, and the flight's jitter must go.
+  const int frames = 300;
+  std::vector<double> times;
+  std::vector<Eigen::Vector3d> truth, noisy;
+  std::mt19937 rng(9);
+  std::normal_distribution<double> noise(0.0, 0.003);
+  std::normal_distribution<double> jitter(0.0, 0.1);
+  for (int i = 0; i < frames; ++i) {
+    const double t = i / kFps;
+    const double flying = std::max(0.0, t - 8.0);
+    times.push_back(t);
+    truth.emplace_back(2.5 * flying * flying, 0.0, 50.0);
+    const double sideways = flying > 0 ? jitter(rng) : noise(rng);
+    noisy.push_back(truth.back() + Eigen::Vector3d(noise(rng), sideways, noise(rng)));
+  }
+  const std::vector<Eigen::Vector3d> smoothed = SmoothCentres(times, noisy, {});
+  const std::vector<Eigen::Vector3d> flight_truth(truth.begin() + 250, truth.end());
+  const std::vector<Eigen::Vector3d> flight_noisy(noisy.begin() + 250, noisy.end());
+  const std::vector<Eigen::Vector3d> flight_smoothed(smoothed.begin() + 250, smoothed.end());
+  EXPECT_LT(Rms(flight_smoothed, flight_truth), 0.6 * Rms(flight_noisy, flight_truth));
+}
+
 TEST(CentreSmoothing, SparseFramesAndDisabledOptionLeaveCentresAlone) {
   // One photo a second: no window holds min_frames frames.
   const FramesRun photos = MakeRun(30, 1.0);
