@@ -282,8 +282,8 @@ void SubmapAligner::PromoteIfLarger(int component) {
   const PendingComponent& promoted = pending_.at(component);
   const std::size_t promoted_submaps = promoted.component_from_submap.size();
   const std::uint32_t first = promoted.component_from_submap.begin()->first;
-  const LevelingResult level = LevelSubmap(ReadSubmap(submaps_root_, first), options_.leveling);
-  const Sim3 world_from_component = level.world_from_submap * promoted.component_from_submap.at(first).Inverse();
+  const Sim3 world_from_component =
+      LevelPart(ReadSubmap(submaps_root_, first), promoted.component_from_submap.at(first), options_.leveling);
 
   // The old main map becomes a disconnected part, displayed where it was (in the old world
   // frame: world_from_component stays the identity).

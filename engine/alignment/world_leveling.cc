@@ -102,4 +102,8 @@ LevelingResult LevelSubmap(const Submap& submap, const LevelingOptions& options)
   return LevelGround(points, centres, options);
 }
 
+Sim3 LevelPart(const Submap& first, const Sim3& part_from_first, const LevelingOptions& options) {
+  return LevelSubmap(first, options).world_from_submap * part_from_first.Inverse();
+}
+
 }  // namespace glam

@@ -38,4 +38,9 @@ LevelingResult LevelGround(const std::vector<Eigen::Vector3d>& points,
 // Convenience: landmarks and keyframe centres of a submap.
 LevelingResult LevelSubmap(const Submap& submap, const LevelingOptions& options = {});
 
+// The frame of a part of the map (submaps placed relative to each other, in `part` units), as
+// the world frame is built: `first`, the part's first submap, levelled. part_from_first: where
+// that submap sits in the part. Returns levelled_from_part.
+Sim3 LevelPart(const Submap& first, const Sim3& part_from_first, const LevelingOptions& options = {});
+
 }  // namespace glam

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "engine/alignment/world_leveling.h"
@@ -53,13 +54,6 @@ ModelCounts WriteModel(const std::vector<PlacedSubmap>& placed, const fs::path& 
   return {static_cast<std::int64_t>(poses.size()), static_cast<std::int64_t>(points.size())};
 }
 
-// A part's frame: its first submap levelled, like the world frame of the map.
-Sim3 LevelledFromPart(const std::vector<const SubmapPlacement*>& part, const fs::path& submaps_root) {
-  const SubmapPlacement& first = *part.front();
-  const LevelingResult level = LevelSubmap(ReadSubmap(submaps_root, first.id));
-  return level.world_from_submap * first.part_from_submap.Inverse();
-}
-
 }  // namespace
 
 SE3 WorldFromCam(const Sim3& world_from_submap, const SE3& cam_from_submap) {
@@ -90,26 +84,26 @@ MapExportCounts ExportWorldMap(const MapSnapshot& snapshot, const fs::path& subm
   counts.submaps_exported = static_cast<std::int64_t>(map.size());
 
   // Parts, numbered by their first frame.
-  std::vector<std::vector<const SubmapPlacement*>> ordered;
-  for (auto& [unused, members] : parts) ordered.push_back(std::move(members));
-  auto first_frame = [](const std::vector<const SubmapPlacement*>& part) {
-    std::int64_t first = part.front()->first_frame;
-    for (const SubmapPlacement* p : part) first = std::min(first, p->first_frame);
-    return first;
-  };
-  std::sort(ordered.begin(), ordered.end(), [&](const auto& a, const auto& b) {
-    return first_frame(a) < first_frame(b);
-  });
+  std::vector<std::pair<std::int64_t, std::vector<const SubmapPlacement*>>> ordered;  // first frame, submaps
+  for (auto& [unused, members] : parts) {
+    std::int64_t first = members.front()->first_frame;
+    for (const SubmapPlacement* p : members) first = std::min(first, p->first_frame);
+    ordered.emplace_back(first, std::move(members));
+  }
+  std::sort(ordered.begin(), ordered.end(),
+            [](const auto& a, const auto& b) { return a.first < b.first; });
   const fs::path parts_dir = out_dir / "parts";
   std::error_code error;
   fs::remove_all(parts_dir, error);
   if (error) throw EnvironmentError("cannot replace " + parts_dir.string() + ": " + error.message());
   for (std::size_t i = 0; i < ordered.size(); ++i) {
-    const std::vector<const SubmapPlacement*>& members = ordered[i];
+    const std::vector<const SubmapPlacement*>& members = ordered[i].second;
     PartExport part;
     part.number = static_cast<int>(i) + 1;
-    part.first_frame = first_frame(members);
-    const Sim3 levelled_from_part = LevelledFromPart(members, submaps_root);
+    part.first_frame = ordered[i].first;
+    // The part's frame: its first submap levelled, like the world frame of the map.
+    const Sim3 levelled_from_part =
+        LevelPart(ReadSubmap(submaps_root, members.front()->id), members.front()->part_from_submap);
     std::vector<PlacedSubmap> placed;
     for (const SubmapPlacement* p : members) {
       placed.push_back({p->id, levelled_from_part * p->part_from_submap});

@@ -141,6 +141,8 @@ void SubmapBuilder::SmoothFrameCentres() {
     }
     const std::vector<Eigen::Vector3d> fitted = SmoothCentres(times, centres, options);
     for (std::size_t p = begin; p < end; ++p) {
+      // Frames SmoothCentres left where they were (windows too sparse) keep their PnP pose.
+      if (fitted[p - begin] == centres[p - begin]) continue;
       FrameRecord& frame = open_.frames[p];
       std::vector<Eigen::Vector2d> normalized;
       std::vector<Eigen::Vector3d> points;
