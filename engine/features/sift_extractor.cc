@@ -30,6 +30,7 @@ void SiftOptions::Check() const {
     throw InputError("SiftOptions.grid_rows needs grid_cols > 0 (grid_cols = 0 turns bucketing off)");
   }
   CheckInRange("SiftOptions.extraction_scale", extraction_scale, 0.05, 1.0);
+  CheckInRange("SiftOptions.single_pass_extra_keypoints", single_pass_extra_keypoints, -1, 1000000);
 }
 
 void ApplyRootSift(cv::Mat* descriptors) {
@@ -54,28 +55,32 @@ SiftExtractor::SiftExtractor(const SiftOptions& options) : options_(options) {
                            options_.contrast_threshold, options_.edge_threshold, options_.sigma);
 }
 
-std::vector<cv::KeyPoint> SiftExtractor::Bucket(std::vector<cv::KeyPoint> keypoints,
-                                                cv::Size size) const {
+std::vector<std::size_t> SiftExtractor::Bucket(const std::vector<cv::KeyPoint>& keypoints,
+                                               cv::Size size) const {
   const size_t budget = static_cast<size_t>(options_.max_features);
-  if (keypoints.size() <= budget) return keypoints;
+  std::vector<std::size_t> order(keypoints.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  if (keypoints.size() <= budget) return order;
   const int cols = options_.grid_cols;
   const int rows = options_.grid_rows > 0 ? options_.grid_rows
                                           : std::max(1, cols * size.height / std::max(1, size.width));
   const size_t per_cell = (budget + static_cast<size_t>(cols * rows) - 1) / (cols * rows);
-  std::stable_sort(keypoints.begin(), keypoints.end(),
-                   [](const cv::KeyPoint& a, const cv::KeyPoint& b) { return a.response > b.response; });
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return keypoints[a].response > keypoints[b].response;
+  });
   std::vector<size_t> count(static_cast<size_t>(cols * rows), 0);
-  std::vector<cv::KeyPoint> kept, leftovers;
+  std::vector<std::size_t> kept, leftovers;
   kept.reserve(budget);
-  for (const auto& kp : keypoints) {
+  for (const std::size_t i : order) {
+    const cv::KeyPoint& kp = keypoints[i];
     const int cx = std::clamp(static_cast<int>(kp.pt.x * cols / size.width), 0, cols - 1);
     const int cy = std::clamp(static_cast<int>(kp.pt.y * rows / size.height), 0, rows - 1);
     size_t& n = count[static_cast<size_t>(cy * cols + cx)];
     if (n < per_cell && kept.size() < budget) {
       ++n;
-      kept.push_back(kp);
+      kept.push_back(i);
     } else {
-      leftovers.push_back(kp);
+      leftovers.push_back(i);
     }
   }
   for (size_t i = 0; i < leftovers.size() && kept.size() < budget; ++i) kept.push_back(leftovers[i]);
@@ -91,9 +96,28 @@ Features SiftExtractor::Extract(const cv::Mat& image) const {
 
   Features features;
   if (options_.grid_cols > 0) {
-    sift_->detect(gray, features.keypoints);
-    features.keypoints = Bucket(std::move(features.keypoints), gray.size());
-    sift_->compute(gray, features.keypoints, features.descriptors);
+    const bool single_pass =
+        options_.single_pass_extra_keypoints >= 0 &&
+        last_detected_ <= static_cast<std::size_t>(options_.max_features + options_.single_pass_extra_keypoints);
+    std::vector<cv::KeyPoint> detected;
+    cv::Mat described;
+    if (single_pass) {
+      sift_->detectAndCompute(gray, cv::noArray(), detected, described);
+    } else {
+      sift_->detect(gray, detected);
+    }
+    last_detected_ = detected.size();
+    const std::vector<std::size_t> kept = Bucket(detected, gray.size());
+    features.keypoints.reserve(kept.size());
+    for (const std::size_t i : kept) features.keypoints.push_back(detected[i]);
+    if (single_pass) {
+      features.descriptors.create(static_cast<int>(kept.size()), described.cols, described.type());
+      for (std::size_t r = 0; r < kept.size(); ++r) {
+        described.row(static_cast<int>(kept[r])).copyTo(features.descriptors.row(static_cast<int>(r)));
+      }
+    } else {
+      sift_->compute(gray, features.keypoints, features.descriptors);
+    }
   } else {
     sift_->detectAndCompute(gray, cv::noArray(), features.keypoints, features.descriptors);
   }

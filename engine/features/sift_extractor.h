@@ -36,6 +36,18 @@ struct SiftOptions {
   // Matches better than plain SIFT under L2 at no cost; every consumer of descriptors (tracking,
   // duplicate removal, vocabulary) must use the same setting.
   bool root_sift = true;
+  // With bucketing, how the descriptors are computed (the output is the same either way).
+  // cv::SIFT rebuilds its Gaussian pyramid (image upsampled x2: ~11 ms at 640x360, one core)
+  // when asked to describe given keypoints, and describes a keypoint in ~16 us. So when the
+  // previous frame this extractor saw had at most max_features + single_pass_extra_keypoints
+  // keypoints, all keypoints are detected and described in one pass and the bucketing picks
+  // descriptor rows (describing up to ~700 extra keypoints costs less than the second
+  // pyramid); otherwise the strongest are picked first and described in a second pass.
+  // Measured (glam_bench_feature_stage, 640x360, one core): the loop benchmark video (~1700-1900
+  // keypoints, fewer than the budget) 70 -> 65 ms per detection; the lawnmower video (~3800)
+  // keeps the second pass. 0: one pass only when the previous frame fitted the budget;
+  // -1: always two passes.
+  int single_pass_extra_keypoints = 600;
 
   void Check() const;  // throws InputError
 };
@@ -44,17 +56,21 @@ class SiftExtractor {
  public:
   explicit SiftExtractor(const SiftOptions& options = {});
 
-  // image: 8-bit BGR (colours are sampled) or grey (colours are grey). Thread-compatible:
-  // use one extractor per thread.
+  // image: 8-bit BGR (colours are sampled) or grey (colours are grey). Not thread-safe, not
+  // even for const calls (it remembers the last keypoint count to choose the descriptor pass,
+  // see SiftOptions::single_pass_extra_keypoints): use one extractor per thread.
   Features Extract(const cv::Mat& image) const;
 
   const SiftOptions& options() const { return options_; }
 
  private:
-  std::vector<cv::KeyPoint> Bucket(std::vector<cv::KeyPoint> keypoints, cv::Size size) const;
+  // Indices of the keypoints the grid bucketing keeps (all of them when within the budget).
+  std::vector<std::size_t> Bucket(const std::vector<cv::KeyPoint>& keypoints, cv::Size size) const;
 
   SiftOptions options_;
   cv::Ptr<cv::SIFT> sift_;
+  // Keypoints detected on the previous image (before bucketing); 0 before the first.
+  mutable std::size_t last_detected_ = 0;
 };
 
 // Offset (pixels, in x and y) of cv::SIFT keypoints relative to the integer-pixel-centre

@@ -137,6 +137,31 @@ TEST(SiftExtractor, KeypointsSitAtTheFeatureInIntegerPixelCentreConvention) {
   }
 }
 
+// The descriptor pass is chosen by the previous frame's keypoint count
+// (SiftOptions::single_pass_extra_keypoints); what comes out must not depend on it.
+TEST(SiftExtractor, OneAndTwoDescriptorPassesGiveTheSameFeatures) {
+  for (const int budget : {300, 100000}) {  // bucketing picks a subset / keeps everything
+    SiftOptions one_pass;
+    one_pass.max_features = budget;
+    one_pass.single_pass_extra_keypoints = 1000000;
+    SiftOptions two_passes = one_pass;
+    two_passes.single_pass_extra_keypoints = -1;
+    const SiftExtractor a(one_pass), b(two_passes);
+    for (const std::uint64_t seed : {7u, 8u}) {
+      const cv::Mat image = RandomTexture({480, 270}, seed);
+      const Features fa = a.Extract(image);
+      const Features fb = b.Extract(image);
+      ASSERT_EQ(fa.size(), fb.size());
+      ASSERT_GT(fa.size(), budget < 1000 ? 290u : 1000u);
+      for (std::size_t i = 0; i < fa.size(); ++i) {
+        ASSERT_EQ(fa.keypoints[i].pt, fb.keypoints[i].pt);
+        ASSERT_EQ(fa.colors[i], fb.colors[i]);
+      }
+      EXPECT_EQ(cv::norm(fa.descriptors, fb.descriptors, cv::NORM_INF), 0.0);
+    }
+  }
+}
+
 TEST(SiftExtractor, GreyInputAndBlankImage) {
   cv::Mat grey;
   cv::cvtColor(RandomTexture({320, 240}, 6), grey, cv::COLOR_BGR2GRAY);
