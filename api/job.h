@@ -38,6 +38,9 @@ struct Job {
   std::string input_file;  // file name inside the job directory, e.g. "input.mp4"
   nlohmann::json input_info = nlohmann::json::object();  // probe result: size, fps, frames
   std::vector<std::string> warnings;  // MappingReport::warnings of the last run
+  // The disconnected parts of the last completed run (MappingReport::parts), each
+  // {part, first_frame, last_frame, frames_posed, points}; their files are under parts/<n>/.
+  nlohmann::json parts = nlohmann::json::array();
   // Set when a running job was interrupted (crash, shutdown): the next run continues from
   // the persisted submaps (MappingOptions::resume).
   bool resume = false;

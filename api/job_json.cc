@@ -97,10 +97,16 @@ JobOptions ParseJobOptions(const json& j) {
         throw InputError(fmt::format("options.fixed_k1 must be true or false, got {}", value.dump()));
       }
       o.fixed_k1 = value.get<bool>();
+    } else if (key == "smooth_window_s") {
+      o.smooth_window_s = GetNumber(value, "smooth_window_s");
+      if (!(*o.smooth_window_s >= 0 && *o.smooth_window_s <= 5)) {
+        throw InputError(fmt::format("options.smooth_window_s must be in [0, 5] seconds (0 = off), got {}",
+                                     *o.smooth_window_s));
+      }
     } else {
       throw InputError(fmt::format(
           "options: unknown key \"{}\" (known: name, stride, focal, intrinsics, "
-          "keyframes_per_submap, max_image_size, detect_every, fixed_k1)",
+          "keyframes_per_submap, max_image_size, detect_every, fixed_k1, smooth_window_s)",
           key));
     }
   }
@@ -133,6 +139,7 @@ json ToJson(const JobOptions& o) {
   if (o.max_image_size) j["max_image_size"] = *o.max_image_size;
   if (o.detect_every) j["detect_every"] = *o.detect_every;
   if (o.fixed_k1) j["fixed_k1"] = *o.fixed_k1;
+  if (o.smooth_window_s) j["smooth_window_s"] = *o.smooth_window_s;
   return j;
 }
 
@@ -145,6 +152,7 @@ MappingOptions ToMappingOptions(const JobOptions& o) {
   if (o.keyframes_per_submap) m.submap.keyframes_per_submap = *o.keyframes_per_submap;
   if (o.detect_every) m.detection_interval = *o.detect_every;
   if (o.fixed_k1 && *o.fixed_k1) m.submap.bundle_adjustment.refine_k1 = false;  // as --fixed-k1
+  if (o.smooth_window_s) m.submap.centre_smoothing.half_window_s = *o.smooth_window_s;
   m.Check();
   return m;
 }
@@ -199,6 +207,14 @@ json JobToJson(const Job& job, const std::string& api_base) {
                {"tileset", base + "/tileset.json"},
                {"map_glb", base + "/map.glb"},
                {"viewer", "/?job=" + job.id}};
+  json parts = json::array();
+  for (const json& stored : job.parts) {
+    if (!stored.is_object() || !stored.contains("part") || !stored["part"].is_number_integer()) continue;
+    json part = stored;
+    const std::string dir = base + "/parts/" + std::to_string(stored["part"].get<int>());
+    part["urls"] = {{"trajectory", dir + "/trajectory.tum"}, {"points", dir + "/points.ply"}};
+    parts.push_back(std::move(part));
+  }
   return {{"id", job.id},
           {"name", job.name},
           {"state", std::string(ToString(job.state))},
@@ -209,7 +225,8 @@ json JobToJson(const Job& job, const std::string& api_base) {
           {"progress", ProgressToJson(job.progress)},
           {"options", job.options},
           {"input", job.input_info},
-          {"warnings", job.warnings}};
+          {"warnings", job.warnings},
+          {"parts", parts}};
 }
 
 json ErrorJson(const std::string& code, const std::string& message) {

@@ -28,10 +28,13 @@ struct JobOptions {
   // Keep the lens' radial distortion k1 as it is (0, or the k1 of `intrinsics`, which is
   // never re-estimated) instead of estimating it (`glam map --fixed-k1`).
   std::optional<bool> fixed_k1;
+  // Half width (seconds) of the camera-centre smoothing (`glam map --smooth-window`; 0 = the
+  // per-frame PnP poses).
+  std::optional<double> smooth_window_s;
 };
 
 // Accepts an object with the keys name, stride, focal, intrinsics, keyframes_per_submap,
-// max_image_size, detect_every, fixed_k1 (all optional). Throws InputError naming the key for unknown keys, wrong
+// max_image_size, detect_every, fixed_k1, smooth_window_s (all optional). Throws InputError naming the key for unknown keys, wrong
 // types or out-of-range values (the resulting MappingOptions are Check()ed as well).
 JobOptions ParseJobOptions(const nlohmann::json& j);
 // Parses text as JSON first (InputError "options: malformed JSON ...").

@@ -283,6 +283,7 @@ Job JobService::Restart(const std::string& id) {
   job.progress = MappingProgress{};
   job.progress.stage = "queued";
   job.warnings.clear();
+  job.parts = nlohmann::json::array();
   job.resume = false;
   SetStateLocked(job, JobState::kQueued, std::nullopt, "restarted by request");
   runner_->Enqueue(id);
@@ -428,6 +429,8 @@ void JobService::RunJob(const std::string& id, const CancellationToken& cancel) 
     job.progress = MappingProgress{};
     job.progress.stage = "starting";
     job.warnings.clear();
+    job.parts = nlohmann::json::array();
+  job.parts = nlohmann::json::array();
     try {
       mapping_options = ToMappingOptions(ParseJobOptions(job.options));
     } catch (const std::exception& e) {
@@ -483,6 +486,14 @@ void JobService::RunJob(const std::string& id, const CancellationToken& cancel) 
   if (final_state == JobState::kCompleted) {
     job.progress.eta_s = 0;
     job.warnings = report.warnings;
+    job.parts = nlohmann::json::array();
+    for (const PartExport& part : report.parts) {
+      job.parts.push_back({{"part", part.number},
+                           {"first_frame", part.first_frame},
+                           {"last_frame", part.last_frame},
+                           {"frames_posed", part.frames_posed},
+                           {"points", part.points}});
+    }
   }
   job.resume = false;
   EmitLocked(job, "progress", ProgressToJson(job.progress));

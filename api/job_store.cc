@@ -61,7 +61,7 @@ class Statement {
 
 constexpr const char* kColumns =
     "id, name, state, error, created_ms, updated_ms, options, progress, input_file, input_info, "
-    "warnings, resume, last_event_id";
+    "warnings, resume, last_event_id, parts";
 
 json ParseStored(const std::string& text, json fallback) {
   try {
@@ -91,10 +91,12 @@ Job ReadJob(const Statement& s) {
   }
   job.resume = s.Int(11) != 0;
   job.last_event_id = s.Int(12);
+  job.parts = ParseStored(s.Text(13), json::array());
+  if (!job.parts.is_array()) job.parts = json::array();
   return job;
 }
 
-// Binds the 13 columns in kColumns order starting at index 1.
+// Binds the 14 columns in kColumns order starting at index 1.
 void BindJob(Statement& s, const Job& job) {
   s.Bind(1, job.id).Bind(2, job.name).Bind(3, std::string(ToString(job.state)));
   if (job.error) {
@@ -106,6 +108,7 @@ void BindJob(Statement& s, const Job& job) {
   s.Bind(8, ProgressToJson(job.progress).dump()).Bind(9, job.input_file);
   s.Bind(10, job.input_info.dump()).Bind(11, json(job.warnings).dump());
   s.Bind(12, static_cast<std::int64_t>(job.resume ? 1 : 0)).Bind(13, job.last_event_id);
+  s.Bind(14, job.parts.dump());
 }
 
 }  // namespace
@@ -152,7 +155,23 @@ void JobStore::Migrate() {
         version, kSchemaVersion));
   }
   if (version == kSchemaVersion) return;
-  // Version 0 -> 1: the initial schema. Later versions add steps here, each in a transaction.
+  // Each step migrates one version up, in a transaction.
+  if (version < 1) MigrateTo1();
+  if (version < 2) {
+    // Version 1 -> 2: the disconnected parts of a completed run (Job::parts).
+    Exec("BEGIN");
+    try {
+      Exec("ALTER TABLE jobs ADD COLUMN parts TEXT NOT NULL DEFAULT '[]'; PRAGMA user_version = 2;");
+      Exec("COMMIT");
+    } catch (...) {
+      sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
+      throw;
+    }
+  }
+}
+
+void JobStore::MigrateTo1() {
+  // Version 0 -> 1: the initial schema.
   Exec("BEGIN");
   try {
     Exec(R"sql(
@@ -189,7 +208,7 @@ void JobStore::Migrate() {
 
 void JobStore::Insert(const Job& job) {
   std::lock_guard lock(mutex_);
-  Statement s(db_, fmt::format("INSERT INTO jobs ({}) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?)", kColumns).c_str());
+  Statement s(db_, fmt::format("INSERT INTO jobs ({}) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?)", kColumns).c_str());
   BindJob(s, job);
   s.Step();
 }
@@ -199,7 +218,7 @@ bool JobStore::Update(const Job& job) {
   Statement s(db_,
               "UPDATE jobs SET id=?1, name=?2, state=?3, error=?4, created_ms=?5, updated_ms=?6, "
               "options=?7, progress=?8, input_file=?9, input_info=?10, warnings=?11, resume=?12, "
-              "last_event_id=?13 WHERE id=?1");
+              "last_event_id=?13, parts=?14 WHERE id=?1");
   BindJob(s, job);
   s.Step();
   return sqlite3_changes(db_) > 0;

@@ -23,7 +23,7 @@ namespace glam::api {
 
 class JobStore {
  public:
-  static constexpr int kSchemaVersion = 1;
+  static constexpr int kSchemaVersion = 2;
 
   // Creates the file and schema if needed. Throws EnvironmentError if the database cannot be
   // opened or was written by a newer version.
@@ -53,6 +53,7 @@ class JobStore {
  private:
   void Exec(const char* sql) const;
   void Migrate();
+  void MigrateTo1();  // the initial schema
 
   mutable std::mutex mutex_;
   sqlite3* db_ = nullptr;

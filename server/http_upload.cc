@@ -134,7 +134,7 @@ api::JobOptions RawBodyOptions(const httplib::Request& req) {
     } else {
       try {
         std::size_t used = 0;
-        if (key == "focal") {
+        if (key == "focal" || key == "smooth_window_s") {
           j[key] = std::stod(value, &used);
         } else {
           j[key] = std::stoll(value, &used);

@@ -39,6 +39,12 @@ TEST(JobJson, ParsesOptionsAndMapsThemToEngineOptions) {
   EXPECT_TRUE(ToMappingOptions(fixed).submap.bundle_adjustment.refine_focal);
   EXPECT_TRUE(ToMappingOptions(ParseJobOptionsText(R"({"fixed_k1": false})")).submap.bundle_adjustment.refine_k1);
   EXPECT_EQ(ToJson(fixed), json::parse(R"({"fixed_k1": true})"));
+  // smooth_window_s sets the centre smoothing's half width (as `glam map --smooth-window`).
+  const JobOptions smooth = ParseJobOptionsText(R"({"smooth_window_s": 0})");
+  EXPECT_EQ(ToMappingOptions(smooth).submap.centre_smoothing.half_window_s, 0.0);
+  EXPECT_EQ(ToMappingOptions(JobOptions{}).submap.centre_smoothing.half_window_s,
+            CentreSmoothingOptions{}.half_window_s);
+  EXPECT_EQ(ToJson(smooth), json::parse(R"({"smooth_window_s": 0.0})"));
   // Round trip through the stored JSON.
   const JobOptions back = ParseJobOptions(ToJson(o));
   EXPECT_EQ(ToJson(back), ToJson(o));
@@ -62,6 +68,9 @@ TEST(JobJson, RejectsBadOptionsWithTheKeyInTheMessage) {
   EXPECT_NE(message(R"({"detect_every": -1})").find("detect_every"), std::string::npos);
   EXPECT_NE(message(R"({"fixed_k1": "yes"})").find("fixed_k1"), std::string::npos);
   EXPECT_NE(message(R"({"fixed_k1": 1})").find("fixed_k1"), std::string::npos);
+  EXPECT_NE(message(R"({"smooth_window_s": -0.1})").find("smooth_window_s"), std::string::npos);
+  EXPECT_NE(message(R"({"smooth_window_s": 6})").find("smooth_window_s"), std::string::npos);
+  EXPECT_NE(message(R"({"smooth_window_s": "0.5"})").find("smooth_window_s"), std::string::npos);
   EXPECT_NE(message(R"({"intrinsics": {"model": "pinhole"}})").find("width"), std::string::npos);
   EXPECT_EQ(message("{}"), "accepted");
 }

@@ -44,6 +44,7 @@ TEST(JobStore, PersistsJobsAndEventsAcrossReopen) {
     b.progress.frames_done = 42;
     b.progress.stage = "mapping";
     b.warnings = {"too dark"};
+    b.parts = nlohmann::json::array({{{"part", 1}, {"first_frame", 300}}});
     b.resume = true;
     EXPECT_TRUE(store.Update(b));
     store.AppendEvent(a.id, JobEvent{1, "state", {{"state", "queued"}}});
@@ -58,6 +59,9 @@ TEST(JobStore, PersistsJobsAndEventsAcrossReopen) {
   EXPECT_EQ(got->progress.frames_done, 42);
   EXPECT_EQ(got->progress.stage, "mapping");
   ASSERT_EQ(got->warnings.size(), 1u);
+  ASSERT_EQ(got->parts.size(), 1u);
+  EXPECT_EQ(got->parts[0]["first_frame"], 300);
+  EXPECT_EQ(store.Get(a.id)->parts, nlohmann::json::array());
   EXPECT_TRUE(got->resume);
   EXPECT_EQ(got->options["stride"], 2);
   EXPECT_FALSE(store.Get(a.id)->error.has_value());
@@ -102,6 +106,49 @@ TEST(JobStore, RemoveDeletesJobAndEvents) {
   EXPECT_FALSE(store.Remove(a.id));
   EXPECT_FALSE(store.Get(a.id).has_value());
   EXPECT_TRUE(store.EventsAfter(a.id, 0).empty());
+}
+
+// A store written by the version-1 schema (before Job::parts) opens, keeps its jobs and
+// gets the new column; parts written afterwards persist.
+TEST(JobStore, MigratesAVersionOneStore) {
+  const fs::path db = FreshDir("migrate") / "glam.db";
+  sqlite3* raw = nullptr;
+  ASSERT_EQ(sqlite3_open(db.c_str(), &raw), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(raw, R"sql(
+      CREATE TABLE jobs (id TEXT PRIMARY KEY, name TEXT NOT NULL, state TEXT NOT NULL, error TEXT,
+        created_ms INTEGER NOT NULL, updated_ms INTEGER NOT NULL, options TEXT NOT NULL,
+        progress TEXT NOT NULL, input_file TEXT NOT NULL, input_info TEXT NOT NULL,
+        warnings TEXT NOT NULL, resume INTEGER NOT NULL DEFAULT 0,
+        last_event_id INTEGER NOT NULL DEFAULT 0);
+      CREATE TABLE events (job_id TEXT NOT NULL REFERENCES jobs(id) ON DELETE CASCADE,
+        id INTEGER NOT NULL, type TEXT NOT NULL, data TEXT NOT NULL, created_ms INTEGER NOT NULL,
+        PRIMARY KEY (job_id, id));
+      INSERT INTO jobs VALUES ('00000000000000aa', 'old run', 'completed', NULL, 5, 6, '{}', '{}',
+        'input.mp4', '{}', '["a warning"]', 0, 4);
+      PRAGMA user_version = 1;
+    )sql", nullptr, nullptr, nullptr), SQLITE_OK);
+  sqlite3_close(raw);
+  {
+    JobStore store(db);
+    std::optional<Job> old = store.Get("00000000000000aa");
+    ASSERT_TRUE(old.has_value());
+    EXPECT_EQ(old->name, "old run");
+    EXPECT_EQ(old->state, JobState::kCompleted);
+    ASSERT_EQ(old->warnings.size(), 1u);
+    EXPECT_EQ(old->last_event_id, 4);
+    EXPECT_EQ(old->parts, nlohmann::json::array());
+    old->parts = nlohmann::json::array({{{"part", 1}, {"frames_posed", 120}}});
+    EXPECT_TRUE(store.Update(*old));
+  }
+  JobStore reopened(db);  // now version 2: no second migration
+  EXPECT_EQ(reopened.Get("00000000000000aa")->parts[0]["frames_posed"], 120);
+  ASSERT_EQ(sqlite3_open(db.c_str(), &raw), SQLITE_OK);
+  sqlite3_stmt* version = nullptr;
+  ASSERT_EQ(sqlite3_prepare_v2(raw, "PRAGMA user_version", -1, &version, nullptr), SQLITE_OK);
+  ASSERT_EQ(sqlite3_step(version), SQLITE_ROW);
+  EXPECT_EQ(sqlite3_column_int(version, 0), JobStore::kSchemaVersion);
+  sqlite3_finalize(version);
+  sqlite3_close(raw);
 }
 
 TEST(JobStore, RefusesNewerSchemaVersion) {

@@ -51,7 +51,7 @@ class HttpApiTest : public ::testing::Test {
     service_options.executor = [this](const api::Job&, const fs::path& d, const MappingOptions&,
                                       const ProgressCallback& p, const CancellationToken& c) {
       engine_.Run(d, p, c);
-      return MappingReport{};
+      return report_;
     };
     service_ = std::make_unique<api::JobService>(service_options);
     options.port = 0;
@@ -108,6 +108,7 @@ class HttpApiTest : public ::testing::Test {
   fs::path dir_;
   fs::path video_;
   glam::testing::FakeMapping engine_;
+  MappingReport report_;  // what every run reports
   std::string token_;
   std::unique_ptr<api::JobService> service_;
   std::unique_ptr<HttpServer> http_;
@@ -193,10 +194,34 @@ TEST_F(HttpApiTest, UploadFollowEventsAndDownload) {
 // export to parts/<n>/) are served under /parts/<n>/; bad part names are 400, missing parts 404.
 TEST_F(HttpApiTest, DisconnectedPartsAreServedByNumber) {
   Start({}, "parts");
+  PartExport reported;
+  reported.number = 1;
+  reported.submaps = {3, 4};
+  reported.first_frame = 300;
+  reported.last_frame = 449;
+  reported.frames_posed = 150;
+  reported.points = 900;
+  report_.parts = {reported};
   auto client = Client();
+  engine_.hold = true;
   const std::string id = CreateJob(client);
   const std::string base = "/api/v1/jobs/" + id + "/";
+  // While running the job JSON lists no parts; once completed, the report's.
+  WaitForHold();
+  EXPECT_EQ(json::parse(client.Get(base.substr(0, base.size() - 1))->body)["parts"], json::array());
+  engine_.hold = false;
   FollowToEnd(client, id);
+  const json job = json::parse(client.Get(base.substr(0, base.size() - 1))->body);
+  ASSERT_EQ(job["parts"].size(), 1u) << job.dump();
+  EXPECT_EQ(job["parts"][0]["part"], 1);
+  EXPECT_EQ(job["parts"][0]["first_frame"], 300);
+  EXPECT_EQ(job["parts"][0]["last_frame"], 449);
+  EXPECT_EQ(job["parts"][0]["frames_posed"], 150);
+  EXPECT_EQ(job["parts"][0]["points"], 900);
+  EXPECT_EQ(job["parts"][0]["urls"]["trajectory"], base + "parts/1/trajectory.tum");
+  EXPECT_EQ(job["parts"][0]["urls"]["points"], base + "parts/1/points.ply");
+  // Listed jobs carry them too (the web viewer's job list links them).
+  EXPECT_EQ(json::parse(client.Get("/api/v1/jobs")->body)["jobs"][0]["parts"], job["parts"]);
   const fs::path part_dir = dir_ / "data" / "jobs" / id / "parts" / "1";
   fs::create_directories(part_dir);
   const std::string part_trajectory = "2.0 5 0 0 0 0 0 1\n";
@@ -316,7 +341,7 @@ TEST_F(HttpApiTest, MapTilesTilesetAndFormatsAreServed) {
 TEST_F(HttpApiTest, RawBodyUploadTakesOptionsFromQuery) {
   Start({}, "raw");
   auto client = Client();
-  auto res = client.Post("/api/v1/jobs?name=raw%20clip&stride=2&fixed_k1=true&filename=c.avi",
+  auto res = client.Post("/api/v1/jobs?name=raw%20clip&stride=2&fixed_k1=true&smooth_window_s=0.5&filename=c.avi",
                          glam::testing::ReadFile(video_), "video/x-msvideo");
   ASSERT_TRUE(res);
   ASSERT_EQ(res->status, 201) << res->body;
@@ -324,6 +349,7 @@ TEST_F(HttpApiTest, RawBodyUploadTakesOptionsFromQuery) {
   EXPECT_EQ(job["name"], "raw clip");
   EXPECT_EQ(job["options"]["stride"], 2);
   EXPECT_EQ(job["options"]["fixed_k1"], true);
+  EXPECT_EQ(job["options"]["smooth_window_s"], 0.5);
   EXPECT_TRUE(fs::exists(dir_ / "data" / "jobs" / job["id"].get<std::string>() / "input.avi"));
   res = client.Post("/api/v1/jobs", {{"X-Glam-Options", R"({"keyframes_per_submap": 6})"}},
                     glam::testing::ReadFile(video_), "application/octet-stream");
@@ -351,6 +377,8 @@ TEST_F(HttpApiTest, BadRequestCorpusGetsDocumentedStatuses) {
   ExpectError(client.Post("/api/v1/jobs?stride=abc", video, "video/x-msvideo"), 400, "bad_request", "bad query");
   ExpectError(client.Post("/api/v1/jobs?fixed_k1=maybe", video, "video/x-msvideo"), 400, "bad_request",
               "bad boolean query");
+  ExpectError(client.Post("/api/v1/jobs?smooth_window_s=0.5s", video, "video/x-msvideo"), 400, "bad_request",
+              "bad number query");
   ExpectError(client.Post("/api/v1/jobs", httplib::MultipartFormDataItems{{"other", "x", "", "text/plain"}}), 400,
               "missing_video", "no video field");
   ExpectError(client.Get("/api/v1/jobs/ffffffffffffffff"), 404, "not_found", "unknown id");

@@ -29,6 +29,8 @@ const TOKEN = 'browser-test-token';
 const CHROMIUM = process.env.GLAM_CHROMIUM || '/usr/bin/chromium';
 const JOB_TIMEOUT_MS = 180_000;
 const KEYFRAMES_PER_SUBMAP = 4;
+// A path smoothing other than the default, entered in the form, must reach the job options.
+const SMOOTH_WINDOW_S = 0.3;
 
 function args() {
   const out = {};
@@ -162,6 +164,7 @@ async function main() {
     // Short submaps, so that the small clip gives several submaps and map revisions.
     await page.click('#upload-form summary');
     await page.fill('#upload-form input[name=keyframes_per_submap]', String(KEYFRAMES_PER_SUBMAP));
+    await page.fill('#upload-form input[name=smooth_window_s]', String(SMOOTH_WINDOW_S));
     const t0 = Date.now();
     await page.click('#upload-form button[type=submit]');
     await page.waitForURL(/[?&]job=[0-9a-f]{16}/, { timeout: 60_000 });
@@ -286,6 +289,13 @@ async function main() {
     check(JSON.stringify(shownWarnings) === JSON.stringify(job.warnings || []),
       `job table warnings ${JSON.stringify(shownWarnings)} == job JSON warnings ${JSON.stringify(job.warnings)}`);
     console.log(`job table: ${shownWarnings.length} warning(s) shown`);
+    check(job.options && job.options.smooth_window_s === SMOOTH_WINDOW_S,
+      `the form's path smoothing reached the job: options.smooth_window_s ${job.options && job.options.smooth_window_s} == ${SMOOTH_WINDOW_S}`);
+    // Disconnected parts (usually none on this clip) are linked with the job JSON's URLs.
+    const shownParts = await page.$$eval(`#jobs tr[data-id="${jobId}"] .part a`, (els) => els.map((e) => new URL(e.href).pathname));
+    const expectedParts = (job.parts || []).flatMap((p) => [p.urls.trajectory, p.urls.points]);
+    check(shownParts.length === expectedParts.length && shownParts.every((path, i) => path === expectedParts[i]),
+      `job table part links ${JSON.stringify(shownParts)} match the job JSON's parts ${JSON.stringify(expectedParts)}`);
 
     // 7. A standard 3D Tiles client on the quantized tileset, from a page of the same origin.
     const clientPage = await browser.newPage();

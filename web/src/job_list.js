@@ -18,6 +18,20 @@ function warnings(job) {
   return (job.warnings || []).map((w) => `<div class="warning">${escapeHtml(w)}</div>`).join('');
 }
 
+// Parts of the flight that could not be linked to the map (job JSON `parts`, report.json
+// `parts`): each has its own trajectory and point cloud, in its own frame.
+function partDownloads(job) {
+  return (job.parts || []).map((part) => {
+    const title = `frames ${part.first_frame}–${part.last_frame}, ${part.frames_posed} posed, ` +
+      `${part.points} points; not linked to the map, in its own frame`;
+    const links = [['trajectory', 'trajectory.tum'], ['points', 'points.ply']].map(([key, file]) => {
+      const href = withToken(part.urls[key]);
+      return `<a href="${escapeHtml(href)}" download="part${part.part}_${file}">${file}</a>`;
+    }).join(' ');
+    return `<span class="part" data-part="${escapeHtml(String(part.part))}" title="${escapeHtml(title)}">part ${escapeHtml(String(part.part))}: ${links}</span>`;
+  }).join(' ');
+}
+
 function row(job) {
   const p = job.progress || {};
   const fraction = jobFraction(job);
@@ -26,7 +40,7 @@ function row(job) {
     ? DOWNLOADS.map(([, file]) => {
       const href = withToken(apiUrl(`jobs/${job.id}/${file}`));
       return `<a href="${escapeHtml(href)}" download>${file}</a>`;
-    }).join(' ')
+    }).join(' ') + (job.parts && job.parts.length ? ` ${partDownloads(job)}` : '')
     : '';
   return `<tr data-id="${escapeHtml(job.id)}" data-state="${escapeHtml(job.state)}">
     <td><a href="?job=${encodeURIComponent(job.id)}">${escapeHtml(job.name || job.id)}</a></td>

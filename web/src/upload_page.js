@@ -39,6 +39,12 @@ async function collectOptions(form) {
     if (!Number.isInteger(n) || n < min) throw new Error(`${key.replaceAll('_', ' ')} must be an integer ≥ ${min}`);
     options[key] = n;
   }
+  const smooth = form.elements.smooth_window_s.value.trim();
+  if (smooth) {
+    const s = Number(smooth);
+    if (!(s >= 0 && s <= 5)) throw new Error('path smoothing must be between 0 and 5 seconds');
+    options.smooth_window_s = s;
+  }
   return options;
 }
 
