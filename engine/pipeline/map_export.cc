@@ -28,15 +28,21 @@ struct ModelCounts {
 };
 
 // One model's trajectory.tum and points.ply from its submaps (ids ascending, so an overlap
-// frame comes from the earlier submap).
+// frame comes from the earlier submap, unless that one posed it without landmark matches, by
+// rotation only during a hovering yaw, and a later one by PnP).
 ModelCounts WriteModel(const std::vector<PlacedSubmap>& placed, const fs::path& submaps_root,
                        const fs::path& dir, double fps) {
-  std::map<std::int64_t, SE3> poses;  // frame index -> frame_from_cam
+  std::map<std::int64_t, std::pair<SE3, bool>> poses;  // frame index -> frame_from_cam, by PnP
   std::vector<ColoredPoint> points;
   for (const PlacedSubmap& entry : placed) {
     const Submap submap = ReadSubmap(submaps_root, entry.id);
     for (const FramePose& fp : submap.frame_poses) {
-      poses.try_emplace(fp.frame_index, WorldFromCam(entry.frame_from_submap, fp.cam_from_submap));
+      const bool by_pnp = fp.pnp_inliers > 0;
+      const auto [it, added] =
+          poses.try_emplace(fp.frame_index, WorldFromCam(entry.frame_from_submap, fp.cam_from_submap), by_pnp);
+      if (!added && by_pnp && !it->second.second) {
+        it->second = {WorldFromCam(entry.frame_from_submap, fp.cam_from_submap), true};
+      }
     }
     points.reserve(points.size() + submap.landmarks.size());
     for (const Landmark& lm : submap.landmarks) {
@@ -48,7 +54,7 @@ ModelCounts WriteModel(const std::vector<PlacedSubmap>& placed, const fs::path& 
   }
   std::vector<TimedPose> timed;
   timed.reserve(poses.size());
-  for (const auto& [index, pose] : poses) timed.push_back({static_cast<double>(index) / fps, pose});
+  for (const auto& [index, pose] : poses) timed.push_back({static_cast<double>(index) / fps, pose.first});
   WriteTumTrajectory(dir / "trajectory.tum", timed);
   WritePlyPoints(dir / "points.ply", points);
   return {static_cast<std::int64_t>(poses.size()), static_cast<std::int64_t>(points.size())};

@@ -51,6 +51,18 @@ struct FrameRecord {
   std::optional<SE3> cam_from_submap;  // set when tracking posed the frame
   // (feature index, landmark id) of the PnP inliers.
   std::vector<std::pair<int, std::uint32_t>> landmark_matches;
+  // Set when the frame was posed by rotation only (SubmapOptions::hover_max_speed: a hovering
+  // drone yawing to ground no landmark covers): its rotation relative to the frame before it
+  // in the open submap, whose centre it shares. Such a frame has no landmark matches and never
+  // becomes a keyframe; its pose is re-derived from that frame's final pose at completion.
+  std::optional<SO3> cam_from_previous_rotation;
+  bool rotation_only() const { return cam_from_previous_rotation.has_value(); }
+  // Forgets the pose and everything tracking found (the frame is tracked again).
+  void ResetPose() {
+    cam_from_submap.reset();
+    landmark_matches.clear();
+    cam_from_previous_rotation.reset();
+  }
 };
 
 // How much of a frame's textured view the map covers: the image is cut into a grid of

@@ -51,7 +51,7 @@ void SubmapBuilder::InsertKeyframes(std::size_t current_position) {
       for (std::size_t p : {half - std::min(d, half), half + d}) {
         if (p <= previous || p >= current_position) continue;
         const FrameRecord& f = open_.frames[p];
-        if (f.cam_from_submap && (f.detected || !detected_only)) return p;
+        if (f.cam_from_submap && !f.rotation_only() && (f.detected || !detected_only)) return p;
       }
     }
     return std::nullopt;

@@ -77,8 +77,7 @@ void SubmapBuilder::StartSubmapAt(std::deque<FrameRecord> frames) {
   open_.start_focal = focal_;
   open_.start_k1 = k1_;
   for (FrameRecord& f : open_.frames) {
-    f.cam_from_submap.reset();
-    f.landmark_matches.clear();
+    f.ResetPose();
   }
 }
 
@@ -99,19 +98,28 @@ void SubmapBuilder::Process(FrameRecord record, std::vector<Submap>* completed) 
   open_.frames.push_back(std::move(record));
   FrameRecord& current = open_.frames.back();
   if (!Track(current)) {
+    if (PoseByRotationOnly(open_.frames.size() - 1)) {
+      ++stats_.frames_rotation_only;
+      return;  // no landmarks in view: nothing for the keyframe rules
+    }
     ++stats_.tracking_losses;
     GLAM_LOG_INFO("tracking lost at frame {}: closing submap, bootstrapping a new one", current.index);
     FrameRecord lost = std::move(current);
     open_.frames.pop_back();
+    // Frames posed by rotation only just before (a hovering yaw) are kept by this submap and
+    // also replayed into the next one, which may see their ground as the drone flies on.
+    std::deque<FrameRecord> restart;
+    for (std::size_t p = open_.frames.size(); p-- > 0 && open_.frames[p].rotation_only();) {
+      restart.push_front(open_.frames[p]);
+    }
+    restart.push_back(std::move(lost));
     if (static_cast<int>(open_.keyframes.size()) >= 3) {
       completed->push_back(Complete());
     } else {
       ++stats_.submaps_discarded;
     }
     previous_tail_.clear();  // no shared ground with the next submap
-    std::deque<FrameRecord> restart;
-    restart.push_back(std::move(lost));
-    StartSubmapAt(std::move(restart));
+    RestartWith(std::move(restart), 0, completed);
     return;
   }
   ++stats_.frames_tracked;
@@ -156,8 +164,7 @@ void SubmapBuilder::RestartWith(std::deque<FrameRecord> frames, int rebuilds,
   open_.rebuilds = rebuilds;
   for (FrameRecord& f : frames) {
     cancel_.ThrowIfCancelled();
-    f.cam_from_submap.reset();
-    f.landmark_matches.clear();
+    f.ResetPose();
     Process(std::move(f), completed);
   }
 }
@@ -203,7 +210,7 @@ bool SubmapBuilder::CanTriangulateWithLastKeyframe(const FrameRecord& frame) con
 std::optional<std::size_t> SubmapBuilder::LastTrackedAfterLastKeyframe() const {
   if (open_.keyframe_frame_positions.empty()) return std::nullopt;
   for (std::size_t p = open_.frames.size(); p-- > open_.keyframe_frame_positions.back() + 1;) {
-    if (open_.frames[p].cam_from_submap) return p;
+    if (open_.frames[p].cam_from_submap && !open_.frames[p].rotation_only()) return p;
   }
   return std::nullopt;
 }
@@ -258,7 +265,7 @@ std::vector<Submap> SubmapBuilder::Finish() {
     std::optional<std::size_t> best;
     std::size_t best_gap = 0;
     for (std::size_t p = 0; p < open_.frames.size(); ++p) {
-      if (!open_.frames[p].cam_from_submap) continue;
+      if (!open_.frames[p].cam_from_submap || open_.frames[p].rotation_only()) continue;
       std::size_t gap = open_.frames.size();
       for (std::size_t k : open_.keyframe_frame_positions) gap = std::min(gap, k > p ? k - p : p - k);
       if (gap > best_gap) {

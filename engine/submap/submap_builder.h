@@ -37,6 +37,7 @@ struct SubmapBuilderStats {
   std::int64_t submaps_completed = 0;
   std::int64_t submaps_discarded = 0;  // closed with < 3 keyframes
   std::int64_t tracking_losses = 0;
+  std::int64_t frames_rotation_only = 0;  // posed by rotation only (SubmapOptions::hover_max_speed)
   std::int64_t submap_rebuilds = 0;  // open submaps tracked again after a focal or k1 change
   double bundle_adjust_seconds = 0;
   // Where the first completed submap's bundle adjustment takes a fixed focal when it is let
@@ -181,6 +182,24 @@ class SubmapBuilder {
   // Constant-velocity prediction from the newest posed frames before the one being tracked.
   std::optional<SE3> PredictPose() const;
   static SE3 ExtrapolateConstantVelocity(const SE3& cam_before_from_submap, const SE3& cam_last_from_submap);
+
+  // tracking_rotation.cc (SubmapOptions::hover_max_speed): poses the frame at `position`, which
+  // tracking could not pose, by rotation only from the frame before it when the drone was
+  // hovering; false when it cannot.
+  bool PoseByRotationOnly(std::size_t position);
+  // Whether the camera was hovering at the posed frame at `position` (the start of a rotation
+  // chain): its centre moved less than hover_max_speed x the median depth of its landmarks per
+  // second between the first and the last frame of HoverWindow(position).
+  bool HoveringAt(std::size_t position) const;
+  // Positions of the PnP-posed frames 0.2-0.7 s before the frame at `position`, newest first,
+  // and the mean of their centres (the frame's own centre when there are none): where a chain
+  // starting after `position` holds the camera.
+  std::vector<std::size_t> HoverWindow(std::size_t position) const;
+  Eigen::Vector3d HoverCentre(std::size_t position) const;
+  // After relocalisation and smoothing: every rotation-only frame takes the centre of the frame
+  // before it and its rotation composed with that frame's (in order, so chains follow their
+  // first frame's final pose); unposed when that frame lost its pose.
+  void RederiveRotationOnlyPoses();
 
   // keyframe_insertion.cc
   void InsertKeyframes(std::size_t current_position);

@@ -99,6 +99,7 @@ void SubmapBuilder::RelocaliseFrames(const std::vector<bool>& keep) {
   for (std::size_t p = 0; p < open_.frames.size(); ++p) {
     if (p < keep.size() && keep[p]) continue;
     FrameRecord& frame = open_.frames[p];
+    if (frame.rotation_only()) continue;  // RederiveRotationOnlyPoses
     std::vector<Eigen::Vector2d> pixels;
     std::vector<Eigen::Vector3d> points;
     for (const auto& [feature, id] : frame.landmark_matches) {
@@ -168,9 +169,11 @@ void SubmapBuilder::SmoothFrameCentres() {
       ++smoothed;
     }
   };
+  // Runs end at unposed and at rotation-only frames (their centre follows the frame before
+  // them afterwards, RederiveRotationOnlyPoses).
   std::size_t run_begin = 0;
   for (std::size_t p = 0; p <= open_.frames.size(); ++p) {
-    if (p < open_.frames.size() && open_.frames[p].cam_from_submap) continue;
+    if (p < open_.frames.size() && open_.frames[p].cam_from_submap && !open_.frames[p].rotation_only()) continue;
     smooth_run(run_begin, p);
     run_begin = p + 1;
   }
@@ -226,6 +229,7 @@ Submap SubmapBuilder::Complete() {
   }
   RelocaliseFrames(refined);
   SmoothFrameCentres();
+  RederiveRotationOnlyPoses();
   CheckFixedFocal();
   // A first submap closed without the camera decisions (by a tracking loss, or out of rebuilds)
   // still decides on k1, for the submaps after it; it keeps the k1 it was built with. A

@@ -25,6 +25,10 @@ void SubmapOptions::Check() const {
   CheckInRange("SubmapOptions.min_bootstrap_parallax_deg", min_bootstrap_parallax_deg, 0.1, 30.0);
   CheckGreater("SubmapOptions.max_bootstrap_frames", max_bootstrap_frames, 1);
   CheckInRange("SubmapOptions.bootstrap_accept_parallax_deg", bootstrap_accept_parallax_deg, 0.0, 90.0);
+  CheckInRange("SubmapOptions.hover_max_speed", hover_max_speed, 0.0, 1.0);
+  CheckInRange("SubmapOptions.hover_min_rotation_fraction", hover_min_rotation_fraction, 0.0, 1.0);
+  CheckInRange("SubmapOptions.hover_max_seconds", hover_max_seconds, 0.0, 3600.0);
+  CheckInRange("SubmapOptions.hover_min_turn_rate_deg_s", hover_min_turn_rate_deg_s, 0.0, 3600.0);
   CheckInRange("SubmapOptions.bootstrap_rotation_veto_fraction", bootstrap_rotation_veto_fraction, 0.0, 1.0);
   CheckInRange("SubmapOptions.bootstrap_rotation_veto_pixels", bootstrap_rotation_veto_pixels, 0.1, 10.0);
   CheckGreaterEqual("SubmapOptions.min_tracking_inliers", min_tracking_inliers, 6);

@@ -61,6 +61,33 @@ struct SubmapOptions {
   double match_ratio = 0.8;            // Lowe's ratio for descriptor matches
   double pnp_threshold_pixels = 3.0;   // RANSAC inlier threshold (processing resolution)
 
+  // --- hovering yaw (tracking_rotation.cc) ---
+  // A drone that stops and yaws in place with an oblique camera turns its view to ground no
+  // landmark covers, and PnP fails. When that happens right after a hover (the camera centre
+  // moved less than hover_max_speed x the median landmark depth per second between the posed
+  // frames 0.7 and 0.2 s before; PnP of the last frames before the loss degrades, measured up
+  // to 0.75 m off), the frame is posed by rotation only: the mean centre of those hover frames,
+  // and the rotation that maps the previous frame's features onto this one's (a pure-rotation
+  // fit explaining at least hover_min_rotation_fraction of the descriptor matches to within
+  // RotationOnlyOptions::inlier_threshold_px, 1 px). Frame after frame, for at most
+  // hover_max_seconds and while the camera turns (hover_min_turn_rate_deg_s); the first frame
+  // that neither PnP nor the rotation poses loses tracking as before, and the next submap is
+  // bootstrapped from the chain's first frame (the chain's frames are replayed into it). Such
+  // frames never become keyframes and add no landmarks. On the PnP jitter of a yawing oblique
+  // camera, hovers measured 0.003-0.010 and a drone accelerating away 0.019 (x depth per
+  // second). Measured on a 45-deg oblique flight hovering through 180-deg yaws: 87.0 -> 97.8 %
+  // of the frames in the map, ATE 0.22 -> 0.17 m (docs/benchmarks.md, "Stop-and-yaw
+  // flights"). 0 = off (the paper: tracking is lost).
+  double hover_max_speed = 0.01;
+  double hover_min_rotation_fraction = 0.5;
+  double hover_max_seconds = 10.0;
+  // The chain also ends where the camera turns slower than this (degrees per second): a pure
+  // rotation fit between consecutive frames cannot tell a slow flight over distant ground from
+  // a hover (measured: a drone flying off at 5 m/s, 85 m from the ground, leaves ~0.3 px that
+  // no rotation explains), so a frame is posed by rotation only while the drone is visibly
+  // turning, which is what took its landmarks out of view.
+  double hover_min_turn_rate_deg_s = 10.0;
+
   // --- triangulation of new landmarks ---
   // New keyframes also wait until the parallax to the previous keyframe is twice this, so the
   // middle keyframe / current frame pair can triangulate.

@@ -48,8 +48,7 @@ bool SubmapBuilder::LocaliseGuidedFirst(FrameRecord& record, std::optional<SE3> 
 }
 
 bool SubmapBuilder::Localise(FrameRecord& record, std::optional<SE3> predicted) const {
-  record.cam_from_submap.reset();
-  record.landmark_matches.clear();
+  record.ResetPose();
   if (record.features.size() == 0 || open_.landmarks.empty()) return false;
   const Camera camera = CurrentCamera();
   const cv::Mat frame_descriptors = record.features.FloatDescriptors();
