@@ -322,6 +322,7 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   report.parts = exported.parts;
   report.points = exported.points;
   report.tracking_losses = stats.tracking_losses;
+  report.frames_rotation_only = stats.frames_rotation_only;
   report.submap_rebuilds = stats.submap_rebuilds;
   report.revision = snapshot->revision;
   report.graph_edges = static_cast<std::int64_t>(aligner.edges().size());

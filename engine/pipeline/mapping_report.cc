@@ -136,6 +136,7 @@ nlohmann::json MappingReport::ToJson() const {
           {"parts", PartsJson(parts)},
           {"points", points},
           {"tracking_losses", tracking_losses},
+          {"frames_rotation_only", frames_rotation_only},
           {"submap_rebuilds", submap_rebuilds},
           {"resumed_from_frame", resumed_from_frame},
           {"revision", revision},

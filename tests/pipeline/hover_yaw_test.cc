@@ -4,11 +4,13 @@
 // rotation is degenerate and triangulates invented parallax (engine/geometry/rotation_only.h).
 // Ground truth: the fixture's own trajectory and surface (`glam eval`).
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <map>
 #include <string>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "engine/pipeline/mapping_job.h"
 #include "tools/eval/evaluation.h"
@@ -73,6 +75,14 @@ TEST(HoverYaw, YawsToUnseenGroundArePosedByRotationOnly) {
   EXPECT_GT(with.trajectory.fraction_posed, 0.95);
   EXPECT_LT(with.trajectory.ate_rmse, without.trajectory.ate_rmse * 1.1);
   EXPECT_LT(with.map->median, 0.35);
+  // report.json counts them (measured 146 over the three yaws).
+  auto rotation_only = [](const std::string& name) {
+    std::ifstream in(fs::temp_directory_path() / ("glam_hover_yaw_" + name) / "report.json");
+    return nlohmann::json::parse(in).at("frames_rotation_only").get<int>();
+  };
+  EXPECT_EQ(rotation_only("no_rotation_only"), 0);
+  EXPECT_GT(rotation_only("default"), 90);
+  EXPECT_LT(rotation_only("default"), 300);
 }
 
 }  // namespace
