@@ -33,6 +33,8 @@ struct MapArgs {
   bool per_keyframe_focal = false;
   bool fixed_k1 = false;
   std::string vocabulary_path;
+  std::string gps_path;
+  bool no_gps = false;
   bool max_features_given = false;  // --max-features on the command line
   bool paper = false;
   MappingOptions options;
@@ -88,6 +90,8 @@ void RunMap(MapArgs& args) {
   if (args.focal != 0) args.options.focal_px = args.focal;
   if (args.per_keyframe_focal) args.options.submap.bundle_adjustment.share_focal = false;
   if (!args.vocabulary_path.empty()) args.options.vocabulary = args.vocabulary_path;
+  if (!args.gps_path.empty()) args.options.gps_track = args.gps_path;
+  if (args.no_gps) args.options.use_gps_sidecar = false;
   args.options.Check();
   if (!std::filesystem::exists(args.input)) {
     throw InputError(fmt::format("input {} does not exist", args.input));
@@ -120,6 +124,14 @@ void RunMap(MapArgs& args) {
       report.frames_decoded, report.frames_posed, report.frames_unposed, report.submaps,
       report.disconnected_submaps, report.keyframes, report.points, report.focal_original,
       report.processing_fps, args.out);
+  if (report.georeference.ok) {
+    const Geodetic& o = report.georeference.origin;
+    std::cerr << fmt::format(
+        "glam map: georeferenced by {} ({} GPS positions, rms {:.2f} m): metres, east-north-up around "
+        "{:.6f}, {:.6f}, {:.1f} m\n",
+        report.gps_track, report.georeference.samples_used, report.georeference.rms_m, o.latitude_deg,
+        o.longitude_deg, o.altitude_m);
+  }
   // Repeated after the progress output so the reason for a poor result is the last thing read.
   for (const std::string& warning : report.warnings) {
     std::cerr << "glam map: warning: " << warning << "\n";
@@ -215,6 +227,11 @@ void RegisterMapCommand(CLI::App& app) {
   cmd->add_flag("--resume", args->options.resume,
                "Continue an interrupted run in the same --out from its last completed submap "
                "(checkpoint.json); without a usable checkpoint the run starts from the beginning");
+  CLI::Option* gps = cmd->add_option(
+      "--gps", args->gps_path,
+      "GPS telemetry of the video (DJI subtitle file, .SRT): the map is written in metres, east-north-up "
+      "(report.json georeference); default: the video's own .SRT next to it, when there is one");
+  cmd->add_flag("--no-gps", args->no_gps, "Do not georeference with the .SRT next to the video")->excludes(gps);
   cmd->add_option("--vocabulary", args->vocabulary_path,
                   "Vocabulary tree for finding overlapping submaps (glam vocab train); default: built in");
   cmd->callback([args] { RunMap(*args); });

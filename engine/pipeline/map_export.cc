@@ -68,6 +68,28 @@ SE3 WorldFromCam(const Sim3& world_from_submap, const SE3& cam_from_submap) {
              world_from_submap * submap_from_cam.translation());
 }
 
+std::map<std::int64_t, Eigen::Vector3d> WorldCameraCentres(const MapSnapshot& snapshot, const fs::path& submaps_root) {
+  std::vector<const SubmapPlacement*> connected;
+  for (const SubmapPlacement& placement : snapshot.submaps) {
+    if (!placement.disconnected) connected.push_back(&placement);
+  }
+  std::sort(connected.begin(), connected.end(),
+            [](const SubmapPlacement* a, const SubmapPlacement* b) { return a->id < b->id; });
+  std::map<std::int64_t, std::pair<Eigen::Vector3d, bool>> centres;  // frame -> centre, by PnP
+  for (const SubmapPlacement* placement : connected) {
+    const Submap submap = ReadSubmap(submaps_root, placement->id);
+    for (const FramePose& fp : submap.frame_poses) {
+      const bool by_pnp = fp.pnp_inliers > 0;
+      const Eigen::Vector3d centre = placement->world_from_submap * fp.cam_from_submap.Inverse().translation();
+      const auto [it, added] = centres.try_emplace(fp.frame_index, centre, by_pnp);
+      if (!added && by_pnp && !it->second.second) it->second = {centre, true};
+    }
+  }
+  std::map<std::int64_t, Eigen::Vector3d> out;
+  for (const auto& [index, centre] : centres) out.emplace(index, centre.first);
+  return out;
+}
+
 MapExportCounts ExportWorldMap(const MapSnapshot& snapshot, const fs::path& submaps_root,
                                const fs::path& out_dir, double fps) {
   MapExportCounts counts;

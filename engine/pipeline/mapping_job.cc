@@ -22,6 +22,7 @@
 #include "engine/map/submap_io.h"
 #include "engine/alignment/vocabulary_tree.h"
 #include "engine/pipeline/alignment_thread.h"
+#include "engine/geo/gps_track.h"
 #include "engine/pipeline/map_export.h"
 #include "engine/pipeline/resume_checkpoint.h"
 #include "engine/pipeline/tile_writer.h"
@@ -151,6 +152,27 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   if (info.frame_count > 0) {
     report.frames_total = (info.frame_count + options.source.stride - 1) / options.source.stride;
   }
+  // GPS telemetry for georeferencing (engine/geo): a track given explicitly must parse (before
+  // any mapping); one found next to the video only warns when it does not.
+  std::optional<std::vector<GpsSample>> gps;
+  if (options.gps_track) {
+    gps = ReadGpsTrack(*options.gps_track);
+    report.gps_track = options.gps_track->string();
+  } else if (options.use_gps_sidecar) {
+    if (const std::optional<std::filesystem::path> sidecar = FindGpsSidecar(input)) {
+      report.gps_track = sidecar->string();
+      try {
+        gps = ReadGpsTrack(*sidecar);
+      } catch (const InputError& e) {
+        // The warning names the file already.
+        std::string reason = e.what();
+        const std::string prefix = sidecar->string() + ": ";
+        if (reason.rfind(prefix, 0) == 0) reason.erase(0, prefix.size());
+        report.georeference.reason = reason;
+      }
+    }
+  }
+  if (gps) GLAM_LOG_INFO("GPS track {}: {} positions", report.gps_track, gps->size());
   const std::optional<ResumeCheckpoint> resume =
       options.resume ? UsableCheckpoint(out_dir, report) : std::nullopt;
   if (resume) {
@@ -302,7 +324,25 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   state.stage = "writing";
   emit(true);
   const auto write_start = Clock::now();
-  const std::shared_ptr<const MapSnapshot> snapshot = aligner.snapshot();
+  std::shared_ptr<const MapSnapshot> snapshot = aligner.snapshot();
+  if (gps) {
+    report.georeference =
+        FitGeoreference(WorldCameraCentres(*snapshot, submaps_root), report.fps, *gps, options.georeference);
+    const GeoreferenceResult& geo = report.georeference;
+    if (geo.ok) {
+      // The map moves into metres, east-north-up: one more revision of every connected
+      // placement (disconnected parts keep their own frames).
+      auto georeferenced = std::make_shared<MapSnapshot>(*snapshot);
+      georeferenced->revision = snapshot->revision + 1;
+      for (SubmapPlacement& placement : georeferenced->submaps) {
+        if (!placement.disconnected) placement.world_from_submap = geo.enu_from_world * placement.world_from_submap;
+      }
+      snapshot = std::move(georeferenced);
+      GLAM_LOG_INFO("georeferenced with {} of {} GPS positions ({} fit, rms {:.2f} m over {:.0f} m, {:.4g} m per map unit)",
+                    geo.samples_used, geo.samples_matched, geo.full ? "similarity" : "yaw-scale-offset", geo.rms_m,
+                    geo.extent_m, geo.enu_from_world.scale());
+    }
+  }
   const MapExportCounts exported = ExportWorldMap(*snapshot, submaps_root, out_dir, report.fps);
   tiles.OnRevision(*snapshot);
   tiles.WriteMapGlb(*snapshot, submaps_root);

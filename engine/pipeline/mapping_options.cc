@@ -23,6 +23,7 @@ void MappingOptions::Check() const {
   CheckInRange("MappingOptions.feature_workers", feature_workers, 1, 16);
   CheckInRange("MappingOptions.detection_interval", detection_interval, 0, 1000);
   klt.Check();
+  georeference.Check();
 }
 
 int MappingOptions::EffectiveDetectionInterval(double fps) const {

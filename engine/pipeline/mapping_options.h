@@ -9,6 +9,7 @@
 
 #include "engine/core/camera.h"
 #include "engine/features/klt_propagator.h"
+#include "engine/geo/georeference.h"
 #include "engine/features/sift_extractor.h"
 #include <filesystem>
 
@@ -52,6 +53,14 @@ struct MappingOptions {
   // reloaded and decoding restarts at the first frame the next submap needs, instead of
   // mapping the whole input again (a server restart after a crash uses this).
   bool resume = false;
+  // Georeferencing (engine/geo/georeference.h): GPS telemetry of the video, a DJI subtitle
+  // file (.SRT). When set, it must parse (InputError before any mapping). Unset: the video's
+  // sidecar (same name, .SRT) is used when use_gps_sidecar and it exists; a sidecar that does
+  // not parse or fit only gives a warning. With a fit the outputs are in metres,
+  // east-north-up around the first GPS position (report.json "georeference").
+  std::optional<std::filesystem::path> gps_track;
+  bool use_gps_sidecar = true;
+  GeoreferenceOptions georeference;
 
   void Check() const;  // throws InputError
 

@@ -33,6 +33,27 @@ nlohmann::json AlignmentJson(const std::vector<SubmapAlignmentTiming>& timings) 
   return {{"mean_latency_s", mean}, {"max_latency_s", worst}, {"per_submap", per_submap}};
 }
 
+// null without a GPS track; otherwise whether and how the map was put in metres, ENU.
+nlohmann::json GeoreferenceJson(const std::string& track, const GeoreferenceResult& g) {
+  if (track.empty()) return nullptr;
+  nlohmann::json j = {{"gps_track", track}, {"ok", g.ok}};
+  if (!g.ok) {
+    j["reason"] = g.reason;
+    return j;
+  }
+  j["frame"] = "ENU";
+  j["origin"] = {{"latitude", g.origin.latitude_deg},
+                 {"longitude", g.origin.longitude_deg},
+                 {"altitude", g.origin.altitude_m}};
+  j["fit"] = g.full ? "similarity" : "yaw_scale_offset";
+  j["metres_per_map_unit"] = g.enu_from_world.scale();
+  j["samples_matched"] = g.samples_matched;
+  j["samples_used"] = g.samples_used;
+  j["rms_m"] = g.rms_m;
+  j["extent_m"] = g.extent_m;
+  return j;
+}
+
 nlohmann::json PartsJson(const std::vector<PartExport>& parts) {
   nlohmann::json out = nlohmann::json::array();
   for (const PartExport& part : parts) {
@@ -117,6 +138,12 @@ std::vector<std::string> Diagnose(const MappingReport& r, int min_features) {
         "--focal or --intrinsics, or the job option `focal`)",
         r.focal_original));
   }
+  if (!r.gps_track.empty() && !r.georeference.ok) {
+    warnings.push_back(fmt::format(
+        "the GPS track {} was not used ({}), so the map is not georeferenced: its scale and "
+        "heading are the first submap's",
+        r.gps_track, r.georeference.reason));
+  }
   return warnings;
 }
 
@@ -158,6 +185,7 @@ nlohmann::json MappingReport::ToJson() const {
           {"processing_fps", processing_fps},
           {"processing_size", {processing_width, processing_height}},
           {"input_ended_early", input_ended_early},
+          {"georeference", GeoreferenceJson(gps_track, georeference)},
           {"warnings", warnings},
           {"timings_s",
            {{"decode_and_features", timings.decode_and_features_s},

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "engine/alignment/submap_aligner.h"
+#include "engine/geo/georeference.h"
 #include "engine/pipeline/map_export.h"
 
 namespace glam {
@@ -80,6 +81,10 @@ struct MappingReport {
   int processing_width = 0;
   int processing_height = 0;
   bool input_ended_early = false;
+  // Georeferencing from GPS telemetry (MappingOptions::gps_track): the file used (empty when
+  // none), and the fit (ok: the outputs are in metres, east-north-up around its origin).
+  std::string gps_track;
+  GeoreferenceResult georeference;
   // Why frames or the whole input could not be mapped, in words for the user (also logged).
   // Bad footage (textureless, static, truncated) completes with these rather than failing:
   // the run did what the input allows, and the report says what is missing and why.

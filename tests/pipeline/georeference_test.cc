@@ -1,0 +1,109 @@
+// Georeferencing end to end: the lawnmower fixture (ground truth in metres, x east, y north,
+// z up) with a DJI-style .SRT next to the video, made from the true camera positions plus
+// GPS-like noise. The map must come out in metres, east-north-up: its trajectory compared with
+// the truth directly, with no alignment at all.
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "engine/export/tum_trajectory.h"
+#include "engine/geo/geodetic.h"
+#include "engine/pipeline/mapping_job.h"
+#include "tests/support/temp_dir.h"
+
+namespace glam {
+namespace {
+
+namespace fs = std::filesystem;
+
+const fs::path kClip = fs::path(GLAM_TEST_FIXTURES_DIR) / "lawnmower_small";
+const Geodetic kOrigin{46.5, 7.5, 1200.0};
+
+// One subtitle entry per frame, like DJI's, with positions `noise_m` (1 sigma per axis) off,
+// except the first: it is the ENU origin of the result, so the truth maps onto the result by
+// a plain shift.
+std::string MakeSrt(const std::vector<TimedPose>& truth, double noise_m) {
+  const EnuFrame frame(kOrigin);
+  std::mt19937 rng(7);
+  std::normal_distribution<double> n(0.0, noise_m);
+  std::string srt;
+  for (std::size_t i = 0; i < truth.size(); ++i) {
+    const Eigen::Vector3d noise(n(rng), n(rng), n(rng));
+    const Eigen::Vector3d enu = truth[i].world_from_cam.translation() + (i == 0 ? Eigen::Vector3d::Zero() : noise);
+    const Geodetic g = frame.GeodeticFromEnu(enu);
+    const auto ms = static_cast<long>(std::llround(truth[i].timestamp * 1000));
+    srt += fmt::format("{}\n00:00:{:02},{:03} --> 00:00:{:02},{:03}\n<font size=\"28\">FrameCnt: {}\n"
+                       "[latitude: {:.7f}] [longitude: {:.7f}] [rel_alt: {:.3f} abs_alt: {:.3f}] </font>\n\n",
+                       i + 1, ms / 1000, ms % 1000, (ms + 33) / 1000, (ms + 33) % 1000, i + 1, g.latitude_deg,
+                       g.longitude_deg, g.altitude_m - kOrigin.altitude_m, g.altitude_m);
+  }
+  return srt;
+}
+
+TEST(GeoreferenceEndToEnd, AVideoWithItsSrtIsMappedInMetresEastNorthUp) {
+  const fs::path dir = glam::testing::FreshTempDir("georeference_e2e");
+  fs::copy_file(kClip / "video.mp4", dir / "DJI_0001.MP4");
+  const std::vector<TimedPose> truth = ReadTumTrajectory(kClip / "gt_trajectory.tum");
+  std::ofstream(dir / "DJI_0001.SRT") << MakeSrt(truth, 1.0);
+
+  const MappingReport report = RunMapping(dir / "DJI_0001.MP4", dir / "out", MappingOptions{});
+  ASSERT_TRUE(report.georeference.ok) << report.georeference.reason;
+  EXPECT_EQ(fs::path(report.gps_track).filename(), "DJI_0001.SRT");  // found as the sidecar
+  // The truth's first position is the ENU origin of the SRT's first fix (plus its noise).
+  const Eigen::Vector3d shift = truth.front().world_from_cam.translation();
+  const std::vector<TimedPose> mapped = ReadTumTrajectory(dir / "out" / "trajectory.tum");
+  ASSERT_GT(mapped.size(), truth.size() * 9 / 10);
+  double sum = 0;
+  double worst = 0;
+  for (const TimedPose& p : mapped) {
+    const auto index = static_cast<std::size_t>(std::llround(p.timestamp * 30));
+    ASSERT_LT(index, truth.size());
+    const double e = (p.world_from_cam.translation() + shift - truth[index].world_from_cam.translation()).norm();
+    sum += e * e;
+    worst = std::max(worst, e);
+  }
+  const double rms = std::sqrt(sum / static_cast<double>(mapped.size()));
+  std::cout << fmt::format("georeferenced: rms {:.3f} m, worst {:.3f} m over {} frames; fit rms {:.2f} m\n", rms,
+                           worst, mapped.size(), report.georeference.rms_m);
+  // Measured: see docs/benchmarks.md ("Georeferencing"); GPS noise 1 m per axis over 100
+  // samples puts the map's placement within a few decimetres.
+  EXPECT_LT(rms, 0.6);
+  EXPECT_LT(worst, 1.5);
+  // report.json says so.
+  const nlohmann::json j = nlohmann::json::parse(std::ifstream(dir / "out" / "report.json"));
+  EXPECT_EQ(j["georeference"]["ok"], true);
+  EXPECT_EQ(j["georeference"]["frame"], "ENU");
+  // Its origin is the first fix, the first true position.
+  const Geodetic first = EnuFrame(kOrigin).GeodeticFromEnu(shift);
+  EXPECT_NEAR(j["georeference"]["origin"]["latitude"].get<double>(), first.latitude_deg, 1e-7);
+  EXPECT_NEAR(j["georeference"]["origin"]["longitude"].get<double>(), first.longitude_deg, 1e-7);
+  // Without the sidecar (or with --no-gps) the same video is not georeferenced.
+  MappingOptions no_gps;
+  no_gps.use_gps_sidecar = false;
+  const MappingReport plain = RunMapping(dir / "DJI_0001.MP4", dir / "plain", no_gps);
+  EXPECT_TRUE(plain.gps_track.empty());
+  EXPECT_FALSE(plain.georeference.ok);
+}
+
+TEST(GeoreferenceEndToEnd, AnUnusableSidecarWarnsAndAGivenOneMustParse) {
+  const fs::path dir = glam::testing::FreshTempDir("georeference_bad");
+  fs::copy_file(kClip / "video.mp4", dir / "clip.mp4");
+  std::ofstream(dir / "clip.srt") << "1\n00:00:00,000 --> 00:00:01,000\nno telemetry here\n";
+  MappingOptions options;
+  options.submap.keyframes_per_submap = 6;
+  const MappingReport report = RunMapping(dir / "clip.mp4", dir / "out", options);
+  EXPECT_FALSE(report.georeference.ok);
+  bool warned = false;
+  for (const std::string& w : report.warnings) warned |= w.find("GPS track") != std::string::npos;
+  EXPECT_TRUE(warned);
+  EXPECT_GT(report.frames_posed, 0);  // the map itself is made as usual
+  options.gps_track = dir / "clip.srt";  // given explicitly: an error before mapping
+  EXPECT_THROW(RunMapping(dir / "clip.mp4", dir / "out2", options), InputError);
+}
+
+}  // namespace
+}  // namespace glam
