@@ -1,6 +1,7 @@
 #include "api/job_service.h"
 
 #include <algorithm>
+#include <fstream>
 #include <cctype>
 #include <random>
 #include <system_error>
@@ -152,7 +153,7 @@ void JobService::CheckCanQueue() const {
 }
 
 Job JobService::CreateJob(const fs::path& upload, const std::string& original_name,
-                          const JobOptions& job_options) {
+                          const JobOptions& job_options, const std::string& telemetry) {
   json input_info;
   try {
     CheckCanQueue();
@@ -183,6 +184,13 @@ Job JobService::CreateJob(const fs::path& upload, const std::string& original_na
   const fs::path dir = JobDir(job.id);
   fs::create_directories(dir, ec);
   if (!ec) fs::rename(upload, dir / job.input_file, ec);
+  if (!ec && !telemetry.empty()) {
+    // Next to the video under its name, where the engine looks for a sidecar (gps_track.h).
+    std::ofstream out(dir / kTelemetryFile, std::ios::binary);
+    out.write(telemetry.data(), static_cast<std::streamsize>(telemetry.size()));
+    out.close();
+    if (!out) ec = std::make_error_code(std::errc::io_error);
+  }
   if (ec) {
     RemoveQuietly(upload);
     RemoveQuietly(dir);
@@ -265,7 +273,8 @@ void JobService::RemoveOutputs(const Job& job) const {
   const fs::path dir = JobDir(job.id);
   std::error_code ec;
   for (const auto& entry : fs::directory_iterator(dir, ec)) {
-    if (entry.path().filename() != job.input_file) RemoveQuietly(entry.path());
+    const fs::path name = entry.path().filename();
+    if (name != job.input_file && name != kTelemetryFile) RemoveQuietly(entry.path());
   }
 }
 
@@ -430,7 +439,6 @@ void JobService::RunJob(const std::string& id, const CancellationToken& cancel) 
     job.progress.stage = "starting";
     job.warnings.clear();
     job.parts = nlohmann::json::array();
-  job.parts = nlohmann::json::array();
     try {
       mapping_options = ToMappingOptions(ParseJobOptions(job.options));
     } catch (const std::exception& e) {

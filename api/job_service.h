@@ -37,6 +37,10 @@
 
 namespace glam::api {
 
+// The job's GPS telemetry (multipart field "telemetry") inside DIR/jobs/<id>/: the sidecar
+// name of input.<ext> (engine/geo/gps_track.h), kept on restart like the video.
+inline constexpr const char* kTelemetryFile = "input.SRT";
+
 // Runs the engine for one job. The default calls RunMapping(job_dir/input_file, job_dir, ...).
 using JobExecutor = std::function<MappingReport(const Job& job, const std::filesystem::path& job_dir,
                                                 const MappingOptions& options,
@@ -92,9 +96,11 @@ class JobService {
 
   // Takes ownership of `upload` (moved or removed on every path). Probes it (ApiError 422
   // "unsupported_video" if it is not a decodable video), moves it into DIR/jobs/<id>/ and
-  // queues the job. `original_name` gives the display name and file extension.
+  // queues the job. `original_name` gives the display name and file extension. `telemetry`:
+  // the video's GPS track (DJI .SRT text, already validated), stored as kTelemetryFile beside
+  // the video, where the engine finds it and georeferences the map; empty = none.
   Job CreateJob(const std::filesystem::path& upload, const std::string& original_name,
-                const JobOptions& options);
+                const JobOptions& options, const std::string& telemetry = {});
 
   // All of these throw ApiError: 400 "invalid_id" for a malformed id, 404 "not_found".
   Job Get(const std::string& id) const;

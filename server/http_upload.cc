@@ -14,6 +14,7 @@
 
 #include "api/api_error.h"
 #include "api/job_json.h"
+#include "engine/geo/gps_track.h"
 #include "engine/core/error.h"
 #include "engine/core/logging.h"
 #include "server/http_context.h"
@@ -25,6 +26,8 @@ namespace fs = std::filesystem;
 using api::ApiError;
 
 constexpr std::size_t kMaxOptionsBytes = 64 * 1024;
+// A DJI .SRT has ~250 bytes per frame: 64 MiB is over 8 hours of 30 fps telemetry.
+constexpr std::size_t kMaxTelemetryBytes = 64u << 20;
 
 // Counts an upload against max_concurrent_uploads for the lifetime of the request.
 class UploadSlot {
@@ -213,6 +216,7 @@ void HandleCreateJob(Context& ctx, const httplib::Request& req, httplib::Respons
   };
 
   std::string original_name;
+  std::string telemetry;  // multipart field "telemetry": the video's GPS track (DJI .SRT)
   api::JobOptions options;
   bool read_ok = false;
   if (multipart) {
@@ -221,6 +225,7 @@ void HandleCreateJob(Context& ctx, const httplib::Request& req, httplib::Respons
     bool have_video = false;
     bool have_options = false;
     bool options_too_long = false;
+    bool telemetry_too_long = false;
     read_ok = reader(
         [&](const httplib::MultipartFormData& part) {
           field = part.name;
@@ -231,6 +236,8 @@ void HandleCreateJob(Context& ctx, const httplib::Request& req, httplib::Respons
                                                   : part.filename;
           } else if (field == "options") {
             have_options = true;
+          } else if (field == "telemetry") {
+            if (!telemetry.empty()) return false;  // one track per job
           }
           return true;
         },
@@ -243,13 +250,32 @@ void HandleCreateJob(Context& ctx, const httplib::Request& req, httplib::Respons
             }
             options_text.append(data, size);
           }
+          if (field == "telemetry") {
+            if (telemetry.size() + size > kMaxTelemetryBytes) {
+              telemetry_too_long = true;
+              return false;
+            }
+            telemetry.append(data, size);
+          }
           return true;  // other fields are ignored
         });
     if (options_too_long) throw ApiError(400, "bad_options", "the options field is larger than 64 KiB");
+    if (telemetry_too_long) {
+      res.set_header("Connection", "close");
+      throw ApiError(413, "payload_too_large",
+                     fmt::format("the telemetry field is larger than {} MiB", kMaxTelemetryBytes >> 20));
+    }
     if (read_ok && !have_video) {
       throw ApiError(400, "missing_video", "multipart upload without a \"video\" field");
     }
     if (have_options) options = api::ParseJobOptionsText(options_text);
+    if (read_ok && !telemetry.empty()) {
+      try {
+        ParseDjiSrt(telemetry);  // refused now rather than a warning after the mapping
+      } catch (const InputError& e) {
+        throw ApiError(400, "bad_telemetry", fmt::format("telemetry: {}", e.what()));
+      }
+    }
   } else {
     options = RawBodyOptions(req);
     original_name = req.has_param("filename") ? req.get_param_value("filename")
@@ -276,7 +302,7 @@ void HandleCreateJob(Context& ctx, const httplib::Request& req, httplib::Respons
   if (!upload.Close()) ThrowWriteError(upload.error_number());
   if (upload.bytes() == 0) throw ApiError(400, "empty_body", "the uploaded video is empty");
   GLAM_LOG_DEBUG("upload of {} bytes received", upload.bytes());
-  const api::Job job = ctx.service.CreateJob(upload.Release(), original_name, options);
+  const api::Job job = ctx.service.CreateJob(upload.Release(), original_name, options, telemetry);
   res.set_header("Location", "/api/v1/jobs/" + job.id);
   SendJson(res, 201, api::JobToJson(job));
 }

@@ -338,6 +338,37 @@ TEST_F(HttpApiTest, MapTilesTilesetAndFormatsAreServed) {
   EXPECT_EQ(res->body, glam::testing::ReadFile(job_dir / "map.glb"));
 }
 
+// A multipart upload may carry the video's GPS track (field "telemetry", a DJI .SRT): it is
+// checked, stored beside the video as the engine's sidecar (input.SRT) and kept on restart;
+// an unreadable one is refused before the job exists.
+TEST_F(HttpApiTest, TelemetryIsStoredBesideTheVideo) {
+  Start({}, "telemetry");
+  auto client = Client();
+  const std::string srt =
+      "1\n00:00:00,000 --> 00:00:00,033\n[latitude: 46.5] [longitude: 7.5] [rel_alt: 50.0 abs_alt: 1250.0]\n\n"
+      "2\n00:00:00,033 --> 00:00:00,066\n[latitude: 46.50001] [longitude: 7.5] [rel_alt: 50.0 abs_alt: 1250.0]\n";
+  httplib::MultipartFormDataItems items = {
+      {"video", glam::testing::ReadFile(video_), "DJI_0001.MP4", "video/mp4"},
+      {"telemetry", srt, "DJI_0001.SRT", "application/x-subrip"}};
+  auto res = client.Post("/api/v1/jobs", items);
+  ASSERT_TRUE(res);
+  ASSERT_EQ(res->status, 201) << res->body;
+  const std::string id = json::parse(res->body)["id"];
+  const fs::path job_dir = dir_ / "data" / "jobs" / id;
+  FollowToEnd(client, id);
+  EXPECT_EQ(glam::testing::ReadFile(job_dir / "input.SRT"), srt);
+  res = client.Post("/api/v1/jobs/" + id + "/restart");
+  ASSERT_TRUE(res);
+  ASSERT_EQ(res->status, 200) << res->body;
+  EXPECT_TRUE(fs::exists(job_dir / "input.SRT"));  // kept with the video
+  FollowToEnd(client, id);
+
+  const std::size_t jobs_before = json::parse(client.Get("/api/v1/jobs")->body)["total"];
+  items[1].content = "1\n00:00:00,000 --> 00:00:01,000\nno positions\n";
+  ExpectError(client.Post("/api/v1/jobs", items), 400, "bad_telemetry", "telemetry without positions");
+  EXPECT_EQ(json::parse(client.Get("/api/v1/jobs")->body)["total"], jobs_before);
+}
+
 TEST_F(HttpApiTest, RawBodyUploadTakesOptionsFromQuery) {
   Start({}, "raw");
   auto client = Client();

@@ -18,7 +18,7 @@
 // Prints the time from each submap's `submap` event to its tile being visible (benchmark).
 // Exits 0 on success, 1 on a failed check (chromium missing is a failure, not a skip).
 import { spawn } from 'node:child_process';
-import { existsSync, mkdirSync, mkdtempSync, rmSync, writeFileSync } from 'node:fs';
+import { existsSync, mkdirSync, mkdtempSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { dirname, join, resolve } from 'node:path';
 import { createInterface } from 'node:readline';
@@ -31,6 +31,26 @@ const JOB_TIMEOUT_MS = 180_000;
 const KEYFRAMES_PER_SUBMAP = 4;
 // A path smoothing other than the default, entered in the form, must reach the job options.
 const SMOOTH_WINDOW_S = 0.3;
+
+// A DJI-style GPS track (.SRT) for the clip, from its ground truth (x east, y north, z up,
+// metres) around a made-up origin (small-area spherical conversion; GPS noise is larger).
+function srtFromTruth(truthPath) {
+  const R = 6378137;
+  const lat0 = 46.5, lon0 = 7.5, alt0 = 1200;
+  const lines = readFileSync(truthPath, 'utf8').split('\n').filter((l) => l && !l.startsWith('#'));
+  const stamp = (s) => {
+    const ms = Math.round(s * 1000);
+    const pad = (n, w) => String(n).padStart(w, '0');
+    return `00:${pad(Math.floor(ms / 60000), 2)}:${pad(Math.floor(ms / 1000) % 60, 2)},${pad(ms % 1000, 3)}`;
+  };
+  return lines.map((line, i) => {
+    const [t, x, y, z] = line.trim().split(/\s+/).map(Number);
+    const lat = lat0 + (y / R) * 180 / Math.PI;
+    const lon = lon0 + (x / (R * Math.cos(lat0 * Math.PI / 180))) * 180 / Math.PI;
+    return `${i + 1}\n${stamp(t)} --> ${stamp(t + 0.03)}\n[latitude: ${lat.toFixed(8)}] [longitude: ${lon.toFixed(8)}] ` +
+      `[rel_alt: ${z.toFixed(3)} abs_alt: ${(alt0 + z).toFixed(3)}]\n`;
+  }).join('\n');
+}
 
 function args() {
   const out = {};
@@ -161,6 +181,11 @@ async function main() {
     // 1. Upload through the page (the token arrives as ?token= and is kept by the page).
     await page.goto(`${base}/?token=${TOKEN}`);
     await page.setInputFiles('#video-file', opt.clip);
+    // Its GPS track, so that the map comes out georeferenced (metres, east-north-up).
+    await page.setInputFiles('#upload-form input[name=telemetry]', {
+      name: 'clip.SRT', mimeType: 'application/x-subrip',
+      buffer: Buffer.from(srtFromTruth(join(dirname(opt.clip), 'gt_trajectory.tum'))),
+    });
     // Short submaps, so that the small clip gives several submaps and map revisions.
     await page.click('#upload-form summary');
     await page.fill('#upload-form input[name=keyframes_per_submap]', String(KEYFRAMES_PER_SUBMAP));
@@ -190,6 +215,8 @@ async function main() {
     check(viewer.pointsConnected === job.progress.points && viewer.pointsConnected > 0,
       `points decoded in the page (connected submaps) ${viewer.pointsConnected} == job progress.points ${job.progress.points}`);
     check(report.points === job.progress.points, `report.json points ${report.points} == progress.points ${job.progress.points}`);
+    check(report.georeference && report.georeference.ok === true && report.georeference.frame === 'ENU',
+      `the GPS track uploaded with the video georeferenced the map: ${JSON.stringify(report.georeference)}`);
     check(viewer.revision === tileset.extras.revision, `viewer revision ${viewer.revision} == tileset revision ${tileset.extras.revision}`);
     const fetches = Object.values(viewer.tileFetches);
     check(fetches.length === children.length && fetches.every((n) => n === 1),

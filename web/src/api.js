@@ -90,11 +90,13 @@ export async function deleteJob(id) {
 }
 
 // Multipart upload through XHR because fetch has no upload progress. options: the job
-// options object of docs/api.md ("Creating a job"). onProgress(fraction in 0..1).
-export function uploadVideo(file, options, onProgress) {
+// options object of docs/api.md ("Creating a job"); telemetry: the video's GPS track (a DJI
+// .SRT File) or null. onProgress(fraction in 0..1).
+export function uploadVideo(file, options, onProgress, telemetry = null) {
   return new Promise((resolve, reject) => {
     const form = new FormData();
     form.append('video', file, file.name);
+    if (telemetry) form.append('telemetry', telemetry, telemetry.name);
     if (options && Object.keys(options).length > 0) form.append('options', JSON.stringify(options));
     const xhr = new XMLHttpRequest();
     xhr.open('POST', apiUrl('jobs'));

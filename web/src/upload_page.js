@@ -95,7 +95,7 @@ export function setupUploadPage(root, onCreated) {
       const job = await uploadVideo(file, options, (fraction) => {
         bar.value = fraction;
         status.textContent = `Uploading ${file.name}: ${Math.round(fraction * 100)} %`;
-      });
+      }, form.elements.telemetry.files[0] || null);
       bar.value = 1;
       status.textContent = `Job ${job.id} created (${job.state}).`;
       form.reset();
