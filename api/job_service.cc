@@ -1,8 +1,8 @@
 #include "api/job_service.h"
 
 #include <algorithm>
-#include <fstream>
 #include <cctype>
+#include <fstream>
 #include <random>
 #include <system_error>
 

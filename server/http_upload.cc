@@ -26,7 +26,7 @@ namespace fs = std::filesystem;
 using api::ApiError;
 
 constexpr std::size_t kMaxOptionsBytes = 64 * 1024;
-// A DJI .SRT has ~250 bytes per frame: 64 MiB is over 8 hours of 30 fps telemetry.
+// A DJI .SRT has ~250 bytes per frame: 64 MiB holds ~2.5 hours of 30 fps telemetry.
 constexpr std::size_t kMaxTelemetryBytes = 64u << 20;
 
 // Counts an upload against max_concurrent_uploads for the lifetime of the request.
