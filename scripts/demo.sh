@@ -13,9 +13,9 @@ PORT="${PORT:-8080}"
 API="http://127.0.0.1:$PORT/api/v1"
 mkdir -p "$OUT"
 
-echo "== 1/5 rendering the sample: a 300-frame lawnmower flight (640x360, 100 m altitude)"
+echo "== 1/5 rendering the sample: a 300-frame lawnmower flight (640x360, 100 m altitude) with its GPS track"
 "$GLAM" synth --trajectory lawnmower --frames 300 --width 640 --height 360 --altitude 100 \
-  --seed 1 --out "$OUT/gt"
+  --seed 1 --gps-noise 1.5 --out "$OUT/gt"
 
 echo "== 2/5 starting the server: glam serve --data $OUT/data --port $PORT"
 "$GLAM" serve --data "$OUT/data" --port "$PORT" > "$OUT/serve.out" 2> "$OUT/serve.log" &
@@ -28,10 +28,11 @@ for _ in $(seq 1 100); do
 done
 curl -sf "$API/health" > /dev/null || { echo "the server does not answer on port $PORT"; exit 1; }
 
-echo "== 3/5 uploading: curl -F video=@$OUT/gt/video.mp4 -F options=... $API/jobs"
+echo "== 3/5 uploading: curl -F video=@$OUT/gt/video.mp4 -F telemetry=@$OUT/gt/video.SRT -F options=... $API/jobs"
 OPTIONS=$(jq -c '{name: "demo: synthetic lawnmower", keyframes_per_submap: 6, intrinsics: .}' \
   "$OUT/gt/intrinsics.json")
-JOB=$(curl -sf -F "video=@$OUT/gt/video.mp4;type=video/mp4" -F "options=$OPTIONS" "$API/jobs")
+JOB=$(curl -sf -F "video=@$OUT/gt/video.mp4;type=video/mp4" -F "telemetry=@$OUT/gt/video.SRT" \
+  -F "options=$OPTIONS" "$API/jobs")
 ID=$(jq -r .id <<< "$JOB")
 echo "job $ID queued; map view: http://127.0.0.1:$PORT/?job=$ID"
 
@@ -52,6 +53,9 @@ mkdir -p "$OUT/result"
 for f in trajectory.tum points.ply report.json graph.json; do
   curl -sf -o "$OUT/result/$f" "$API/jobs/$ID/$f"
 done
+jq -r '.georeference | if . == null then "not georeferenced" elif .ok then
+  "georeferenced by the GPS track: metres, east-north-up around \(.origin.latitude), \(.origin.longitude) (\(.samples_used) positions, rms \(.rms_m * 100 | round / 100) m)"
+  else "not georeferenced: \(.reason)" end' "$OUT/result/report.json"
 "$GLAM" eval --gt "$OUT/gt" --result "$OUT/result" --json "$OUT/eval.json"
 echo "Results: $OUT/result (trajectory.tum, points.ply, report.json, graph.json); metrics: $OUT/eval.json"
 

@@ -47,6 +47,9 @@ void RegisterSynthCommand(CLI::App& app) {
   cmd->add_option("--cell-size", options->cell_size, "Ground-truth heightfield cell (m)")->capture_default_str();
   cmd->add_option("--building-density", options->building_density, "0 = none, 1 = village")->capture_default_str();
   cmd->add_option("--crf", options->crf, "H.264 CRF (quality, lower is better)")->capture_default_str();
+  cmd->add_option("--gps-noise", options->gps_noise_m,
+                  "Also write video.SRT, the flight's GPS track in DJI's subtitle layout (glam map then "
+                  "georeferences the map), with this much Gaussian noise per axis in metres");
   cmd->add_flag("--frames-dir", options->write_frames, "Also write frames/NNNNNN.png");
   cmd->add_flag("--force", options->force, "Re-render even if the output is up to date");
   cmd->callback([options, trajectory] {

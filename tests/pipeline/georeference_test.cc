@@ -4,7 +4,6 @@
 // the truth directly, with no alignment at all.
 #include <filesystem>
 #include <fstream>
-#include <random>
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -14,6 +13,7 @@
 #include "engine/geo/geodetic.h"
 #include "engine/pipeline/mapping_job.h"
 #include "tests/support/temp_dir.h"
+#include "tools/synth/gps_srt_writer.h"
 
 namespace glam {
 namespace {
@@ -21,34 +21,14 @@ namespace {
 namespace fs = std::filesystem;
 
 const fs::path kClip = fs::path(GLAM_TEST_FIXTURES_DIR) / "lawnmower_small";
-const Geodetic kOrigin{46.5, 7.5, 1200.0};
-
-// One subtitle entry per frame, like DJI's, with positions `noise_m` (1 sigma per axis) off,
-// except the first: it is the ENU origin of the result, so the truth maps onto the result by
-// a plain shift.
-std::string MakeSrt(const std::vector<TimedPose>& truth, double noise_m) {
-  const EnuFrame frame(kOrigin);
-  std::mt19937 rng(7);
-  std::normal_distribution<double> n(0.0, noise_m);
-  std::string srt;
-  for (std::size_t i = 0; i < truth.size(); ++i) {
-    const Eigen::Vector3d noise(n(rng), n(rng), n(rng));
-    const Eigen::Vector3d enu = truth[i].world_from_cam.translation() + (i == 0 ? Eigen::Vector3d::Zero() : noise);
-    const Geodetic g = frame.GeodeticFromEnu(enu);
-    const auto ms = static_cast<long>(std::llround(truth[i].timestamp * 1000));
-    srt += fmt::format("{}\n00:00:{:02},{:03} --> 00:00:{:02},{:03}\n<font size=\"28\">FrameCnt: {}\n"
-                       "[latitude: {:.7f}] [longitude: {:.7f}] [rel_alt: {:.3f} abs_alt: {:.3f}] </font>\n\n",
-                       i + 1, ms / 1000, ms % 1000, (ms + 33) / 1000, (ms + 33) % 1000, i + 1, g.latitude_deg,
-                       g.longitude_deg, g.altitude_m - kOrigin.altitude_m, g.altitude_m);
-  }
-  return srt;
-}
+const Geodetic kOrigin = synth::kSynthGpsOrigin;
 
 TEST(GeoreferenceEndToEnd, AVideoWithItsSrtIsMappedInMetresEastNorthUp) {
   const fs::path dir = glam::testing::FreshTempDir("georeference_e2e");
   fs::copy_file(kClip / "video.mp4", dir / "DJI_0001.MP4");
   const std::vector<TimedPose> truth = ReadTumTrajectory(kClip / "gt_trajectory.tum");
-  std::ofstream(dir / "DJI_0001.SRT") << MakeSrt(truth, 1.0);
+  // A DJI-style track, 1 m of noise per axis (as `glam synth --gps-noise 1`).
+  std::ofstream(dir / "DJI_0001.SRT") << synth::DjiSrtFromTrajectory(truth, 1.0, 7);
 
   const MappingReport report = RunMapping(dir / "DJI_0001.MP4", dir / "out", MappingOptions{});
   ASSERT_TRUE(report.georeference.ok) << report.georeference.reason;

@@ -19,6 +19,8 @@
 #include "engine/core/camera.h"
 #include "engine/core/error.h"
 #include "engine/core/intrinsics_io.h"
+#include "engine/geo/gps_track.h"
+#include "tools/synth/gps_srt_writer.h"
 #include "tools/synth/ground_truth_writer.h"
 #include "tools/synth/renderer.h"
 #include "tools/synth/synth.h"
@@ -397,8 +399,39 @@ TEST(SynthFiles, ClipFilesExistParseAndMatch) {
 
   std::ifstream meta_file(dir / "synth.json");
   EXPECT_EQ(nlohmann::json::parse(meta_file), o.ToJson());
+  EXPECT_FALSE(fs::exists(dir / "video.SRT"));  // only with gps_noise_m >= 0
   o.force = false;
   EXPECT_TRUE(RunSynth(o).skipped);  // same options: nothing to do
+}
+
+// `glam synth --gps-noise`: video.SRT in DJI's layout, one entry per frame at the frame's time,
+// positions the true camera centres (east, north, up around kSynthGpsOrigin) plus the noise.
+TEST(SynthFiles, GpsTrackFollowsTheTrueCentres) {
+  SynthOptions o = SmallOptions();
+  o.out = (fs::path(testing::TempDir()) / "glam_synth_gps").string();
+  o.force = true;
+  o.gps_noise_m = 0;
+  RunSynth(o);
+  const fs::path dir(o.out);
+  const std::vector<TimedPose> truth = ReadTumTrajectory(dir / "gt_trajectory.tum");
+  std::vector<GpsSample> gps = ReadGpsTrack(dir / "video.SRT");
+  ASSERT_EQ(gps.size(), truth.size());
+  const EnuFrame frame(synth::kSynthGpsOrigin);
+  for (std::size_t i = 0; i < gps.size(); ++i) {
+    EXPECT_NEAR(gps[i].time_s, truth[i].timestamp, 1e-3);
+    // 7 decimals of a degree: ~1 cm; altitudes to the millimetre.
+    EXPECT_LT((frame.EnuFromGeodetic(gps[i].position) - truth[i].world_from_cam.translation()).norm(), 0.03);
+  }
+  // With noise: the first fix exact (the origin of a georeferenced result), the rest scattered
+  // by about the requested amount.
+  const std::string noisy = synth::DjiSrtFromTrajectory(truth, 2.0, 5);
+  gps = ParseDjiSrt(noisy);
+  EXPECT_LT((frame.EnuFromGeodetic(gps[0].position) - truth[0].world_from_cam.translation()).norm(), 0.03);
+  double sum = 0;
+  for (std::size_t i = 1; i < gps.size(); ++i) {
+    sum += (frame.EnuFromGeodetic(gps[i].position) - truth[i].world_from_cam.translation()).squaredNorm();
+  }
+  EXPECT_NEAR(std::sqrt(sum / static_cast<double>(gps.size() - 1) / 3), 2.0, 0.5);
 }
 
 TEST(SynthDeterminism, SameSeedSameWorldOtherSeedOtherWorld) {

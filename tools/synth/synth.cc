@@ -11,6 +11,7 @@
 #include "engine/core/intrinsics_io.h"
 #include "engine/core/logging.h"
 #include "engine/export/tum_trajectory.h"
+#include "tools/synth/gps_srt_writer.h"
 #include "tools/synth/ground_truth_writer.h"
 #include "tools/synth/renderer.h"
 #include "tools/synth/trajectory.h"
@@ -71,6 +72,10 @@ SynthReport RunSynth(const SynthOptions& o) {
   std::vector<TimedPose> timed(poses.size());
   for (std::size_t i = 0; i < poses.size(); ++i) timed[i] = {static_cast<double>(i) / o.fps, poses[i]};
   WriteTumTrajectory(dir / "gt_trajectory.tum", timed);
+  fs::remove(dir / "video.SRT", ec);
+  if (o.gps_noise_m >= 0) {
+    std::ofstream(dir / "video.SRT") << DjiSrtFromTrajectory(timed, o.gps_noise_m, o.seed);
+  }
   world.surface().WriteGroundTruth(dir);
   report.world_seconds = Seconds(t0);
 

@@ -84,6 +84,7 @@ void SynthOptions::Check() const {
   CheckInRange("synth.cell_size", cell_size, 0.1, 2.0);
   CheckInRange("synth.building_density", building_density, 0.0, 3.0);
   CheckInRange("synth.crf", crf, 0, 51);
+  if (gps_noise_m > 100) throw InputError("synth.gps_noise_m must be at most 100 m (negative: no GPS track)");
   // Distortion must stay invertible (monotonic radius) over the image corners, otherwise
   // Camera::Unproject is ill-defined there and the render would fold over itself.
   const double f = EffectiveFocal();
@@ -117,6 +118,7 @@ nlohmann::json SynthOptions::ToJson() const {
                         {"crf", crf},
                         {"generator", "glam synth 1"}};
   // Only when used, so that clips rendered before the option existed stay up to date.
+  if (gps_noise_m >= 0) j["gps_noise_m"] = gps_noise_m;
   if (stop_every > 0) {
     j["stop_every"] = stop_every;
     j["stop_seconds"] = stop_seconds;

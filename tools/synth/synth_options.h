@@ -64,6 +64,9 @@ struct SynthOptions {
   bool write_frames = false;  // also write frames/NNNNNN.png
   int crf = 16;               // H.264 quality (lower = better; 16 keeps texture for SIFT)
   bool force = false;         // re-render even if `out` already holds this exact clip
+  // >= 0: also write video.SRT, the clip's GPS track in DJI's layout (gps_srt_writer.h), with
+  // this much Gaussian noise per axis (m); < 0: no track.
+  double gps_noise_m = -1;
 
   // The slowing down and the speeding up of a stop (s); the yaw takes the rest of it.
   double StopRampSeconds() const;
