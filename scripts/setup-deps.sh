@@ -13,7 +13,7 @@ PACKAGES=(
   build-essential cmake ninja-build pkg-config git ca-certificates
   libopencv-dev libeigen3-dev libceres-dev libflann-dev
   libtinygltf-dev libdraco-dev libcpp-httplib-dev nlohmann-json3-dev
-  libspdlog-dev libfmt-dev libsqlite3-dev libtbb-dev libcli11-dev
+  libspdlog-dev libfmt-dev libsqlite3-dev libtbb-dev libcli11-dev libexif-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   ffmpeg libavcodec-dev libavformat-dev libswscale-dev
   curl jq

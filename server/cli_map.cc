@@ -91,7 +91,7 @@ void RunMap(MapArgs& args) {
   if (args.per_keyframe_focal) args.options.submap.bundle_adjustment.share_focal = false;
   if (!args.vocabulary_path.empty()) args.options.vocabulary = args.vocabulary_path;
   if (!args.gps_path.empty()) args.options.gps_track = args.gps_path;
-  if (args.no_gps) args.options.use_gps_sidecar = false;
+  if (args.no_gps) args.options.find_gps = false;
   args.options.Check();
   if (!std::filesystem::exists(args.input)) {
     throw InputError(fmt::format("input {} does not exist", args.input));
@@ -230,8 +230,10 @@ void RegisterMapCommand(CLI::App& app) {
   CLI::Option* gps = cmd->add_option(
       "--gps", args->gps_path,
       "GPS telemetry of the video (DJI subtitle file, .SRT): the map is written in metres, east-north-up "
-      "(report.json georeference); default: the video's own .SRT next to it, when there is one");
-  cmd->add_flag("--no-gps", args->no_gps, "Do not georeference with the .SRT next to the video")->excludes(gps);
+      "(report.json georeference); default: the video's own .SRT next to it, or the EXIF GPS of a photo folder");
+  cmd->add_flag("--no-gps", args->no_gps,
+                "Do not georeference with the .SRT next to the video or the EXIF GPS of a photo folder")
+      ->excludes(gps);
   cmd->add_option("--vocabulary", args->vocabulary_path,
                   "Vocabulary tree for finding overlapping submaps (glam vocab train); default: built in");
   cmd->callback([args] { RunMap(*args); });

@@ -22,12 +22,14 @@
 #include "engine/map/submap_io.h"
 #include "engine/alignment/vocabulary_tree.h"
 #include "engine/pipeline/alignment_thread.h"
+#include "engine/geo/exif_gps.h"
 #include "engine/geo/gps_track.h"
 #include "engine/pipeline/map_export.h"
 #include "engine/pipeline/resume_checkpoint.h"
 #include "engine/pipeline/tile_writer.h"
 #include "engine/submap/submap_builder.h"
 #include "engine/video/frame_source.h"
+#include "engine/video/image_folder_source.h"
 
 namespace glam {
 namespace {
@@ -158,7 +160,14 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   if (options.gps_track) {
     gps = ReadGpsTrack(*options.gps_track);
     report.gps_track = options.gps_track->string();
-  } else if (options.use_gps_sidecar) {
+  } else if (const auto* folder = dynamic_cast<const ImageFolderSource*>(source.get());
+             folder != nullptr && options.find_gps) {
+    std::vector<GpsSample> exif = ExifGpsTrack(folder->files());
+    if (!exif.empty()) {
+      report.gps_track = "EXIF GPS of the photos";
+      gps = std::move(exif);
+    }
+  } else if (options.find_gps) {
     if (const std::optional<std::filesystem::path> sidecar = FindGpsSidecar(input)) {
       report.gps_track = sidecar->string();
       try {

@@ -54,12 +54,13 @@ struct MappingOptions {
   // mapping the whole input again (a server restart after a crash uses this).
   bool resume = false;
   // Georeferencing (engine/geo/georeference.h): GPS telemetry of the video, a DJI subtitle
-  // file (.SRT). When set, it must parse (InputError before any mapping). Unset: the video's
-  // sidecar (same name, .SRT) is used when use_gps_sidecar and it exists; a sidecar that does
-  // not parse or fit only gives a warning. With a fit the outputs are in metres,
-  // east-north-up around the first GPS position (report.json "georeference").
+  // file (.SRT). When set, it must parse (InputError before any mapping). Unset and find_gps:
+  // the video's sidecar (same name, .SRT) when it exists, or the EXIF GPS positions of a photo
+  // folder; a sidecar that does not parse, or a track that does not fit, only gives a warning.
+  // With a fit the outputs are in metres, east-north-up around the first GPS position
+  // (report.json "georeference").
   std::optional<std::filesystem::path> gps_track;
-  bool use_gps_sidecar = true;
+  bool find_gps = true;
   GeoreferenceOptions georeference;
 
   void Check() const;  // throws InputError

@@ -4,14 +4,17 @@
 // the truth directly, with no alignment at all.
 #include <filesystem>
 #include <fstream>
+#include <random>
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <opencv2/videoio.hpp>
 
 #include "engine/export/tum_trajectory.h"
 #include "engine/geo/geodetic.h"
 #include "engine/pipeline/mapping_job.h"
+#include "tests/support/exif_photo.h"
 #include "tests/support/temp_dir.h"
 #include "tools/synth/gps_srt_writer.h"
 
@@ -63,7 +66,7 @@ TEST(GeoreferenceEndToEnd, AVideoWithItsSrtIsMappedInMetresEastNorthUp) {
   EXPECT_NEAR(j["georeference"]["origin"]["longitude"].get<double>(), first.longitude_deg, 1e-7);
   // Without the sidecar (or with --no-gps) the same video is not georeferenced.
   MappingOptions no_gps;
-  no_gps.use_gps_sidecar = false;
+  no_gps.find_gps = false;
   const MappingReport plain = RunMapping(dir / "DJI_0001.MP4", dir / "plain", no_gps);
   EXPECT_TRUE(plain.gps_track.empty());
   EXPECT_FALSE(plain.georeference.ok);
@@ -83,6 +86,47 @@ TEST(GeoreferenceEndToEnd, AnUnusableSidecarWarnsAndAGivenOneMustParse) {
   EXPECT_GT(report.frames_posed, 0);  // the map itself is made as usual
   options.gps_track = dir / "clip.srt";  // given explicitly: an error before mapping
   EXPECT_THROW(RunMapping(dir / "clip.mp4", dir / "out2", options), InputError);
+}
+
+// A folder of drone photos with EXIF GPS (every 6th frame of the clip, positions 1 m off per
+// axis, the first exact) is georeferenced like a video with its .SRT.
+TEST(GeoreferenceEndToEnd, APhotoFolderWithExifGpsIsMappedInMetresEastNorthUp) {
+  const fs::path dir = glam::testing::FreshTempDir("georeference_photos");
+  const std::vector<TimedPose> truth = ReadTumTrajectory(kClip / "gt_trajectory.tum");
+  const EnuFrame frame(kOrigin);
+  std::mt19937 rng(11);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  cv::VideoCapture video((kClip / "video.mp4").string(), cv::CAP_FFMPEG);
+  ASSERT_TRUE(video.isOpened());
+  constexpr int kEvery = 6;
+  fs::create_directories(dir / "photos");
+  cv::Mat image;
+  std::vector<std::size_t> frame_of_photo;
+  for (std::size_t i = 0; video.read(image); ++i) {
+    if (i % kEvery != 0) continue;
+    Eigen::Vector3d enu = truth[i].world_from_cam.translation();
+    if (i > 0) enu += Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+    const Geodetic g = frame.GeodeticFromEnu(enu);
+    glam::testing::WritePhoto(dir / "photos" / fmt::format("DJI_{:04}.JPG", frame_of_photo.size()), image, &g);
+    frame_of_photo.push_back(i);
+  }
+  const MappingReport report = RunMapping(dir / "photos", dir / "out", MappingOptions{});
+  ASSERT_TRUE(report.georeference.ok) << report.georeference.reason;
+  EXPECT_EQ(report.gps_track, "EXIF GPS of the photos");
+  EXPECT_EQ(report.georeference.samples_matched, static_cast<int>(report.frames_posed));
+  const Eigen::Vector3d shift = truth.front().world_from_cam.translation();
+  const std::vector<TimedPose> mapped = ReadTumTrajectory(dir / "out" / "trajectory.tum");
+  ASSERT_GT(mapped.size(), frame_of_photo.size() * 8 / 10);
+  double sum = 0;
+  for (const TimedPose& p : mapped) {
+    const auto photo = static_cast<std::size_t>(std::llround(p.timestamp));  // photo folders: 1 fps
+    ASSERT_LT(photo, frame_of_photo.size());
+    sum += (p.world_from_cam.translation() + shift - truth[frame_of_photo[photo]].world_from_cam.translation()).squaredNorm();
+  }
+  const double rms = std::sqrt(sum / static_cast<double>(mapped.size()));
+  std::cout << fmt::format("photo folder georeferenced: rms {:.3f} m over {} photos (fit rms {:.2f} m)\n", rms,
+                           mapped.size(), report.georeference.rms_m);
+  EXPECT_LT(rms, 0.8);
 }
 
 }  // namespace
