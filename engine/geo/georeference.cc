@@ -45,6 +45,7 @@ void GeoreferenceOptions::Check() const {
   CheckGreater("GeoreferenceOptions.outlier_factor", outlier_factor, 1.0);
   CheckGreaterEqual("GeoreferenceOptions.min_outlier_m", min_outlier_m, 0.0);
   CheckInRange("GeoreferenceOptions.min_spread_ratio", min_spread_ratio, 0.0, 1.0);
+  CheckGreater("GeoreferenceOptions.max_rms_fraction", max_rms_fraction, 0.0);
 }
 
 GeoreferenceResult FitGeoreference(const std::map<std::int64_t, Eigen::Vector3d>& centres_by_frame, double fps,
@@ -80,9 +81,9 @@ GeoreferenceResult FitGeoreference(const std::map<std::int64_t, Eigen::Vector3d>
   for (std::size_t i = 0; i < enu.size(); ++i) centred.row(static_cast<Eigen::Index>(i)) = (enu[i].head<2>() - mean).transpose();
   const Eigen::Vector2d spread = Eigen::JacobiSVD<Eigen::MatrixXd>(centred).singularValues() /
                                  std::sqrt(static_cast<double>(enu.size()));
-  double extent = 0;
-  for (const Eigen::Vector3d& e : enu) extent = std::max(extent, (e.head<2>() - mean).norm());
-  result.extent_m = 2 * extent;
+  // The length of a line sampled evenly with that spread (sqrt(12) sigma): GPS noise around a
+  // hover does not add up to a flight the way the farthest sample would.
+  result.extent_m = std::sqrt(12.0) * spread.x();
   if (result.extent_m < options.min_extent_m) {
     result.reason = fmt::format("the GPS positions span {:.1f} m, {:.0f} m needed", result.extent_m,
                                 options.min_extent_m);
@@ -119,7 +120,14 @@ GeoreferenceResult FitGeoreference(const std::map<std::int64_t, Eigen::Vector3d>
     }
     result.samples_used = count;
     result.rms_m = std::sqrt(sum / std::max(1, count));
-    if (round == 2) break;
+    if (round == 2) {
+      if (result.rms_m > options.max_rms_fraction * result.extent_m) {
+        result.reason = fmt::format("the GPS positions scatter by {:.1f} m around a {:.0f} m flight",
+                                    result.rms_m, result.extent_m);
+        return result;
+      }
+      break;
+    }
     std::vector<double> used_residuals;
     for (std::size_t i = 0; i < world.size(); ++i) {
       if (used[i]) used_residuals.push_back(residuals[i]);

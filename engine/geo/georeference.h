@@ -27,9 +27,13 @@ namespace glam {
 struct GeoreferenceOptions {
   // Fewer GPS samples matched to posed frames than this: no georeference.
   int min_samples = 10;
-  // The matched GPS positions must span at least this (metres, horizontally): over a shorter
-  // path GPS noise would set the scale and heading.
+  // The matched GPS positions must span at least this (metres, horizontally, along their main
+  // direction, from their spread: sqrt(12) x the standard deviation, so the noise of a hover
+  // does not count): over a shorter path GPS noise would set the scale and heading.
   double min_extent_m = 10.0;
+  // ... and the fit's rms may be at most this fraction of that span (consumer GPS scatters
+  // 2-5 m: a flight of a few metres is refused rather than scaled by noise).
+  double max_rms_fraction = 0.25;
   // Samples farther than max(outlier_factor x the median residual, min_outlier_m) from the
   // fit are dropped and the fit repeated (twice).
   double outlier_factor = 3.0;

@@ -91,6 +91,11 @@ TEST(Georeference, RefusesWhatCannotSetScaleOrHeading) {
   GeoreferenceResult r = FitGeoreference(f.world, 30.0, f.gps);
   EXPECT_FALSE(r.ok);
   EXPECT_NE(r.reason.find("span"), std::string::npos) << r.reason;
+  // A hover whose GPS wanders 2 m per axis: the scatter is no flight.
+  auto still = [](double) { return Eigen::Vector3d(0, 0, 30); };
+  const Flight noisy = MakeFlight(truth, 900, 2.0, still);
+  r = FitGeoreference(noisy.world, 30.0, noisy.gps);
+  EXPECT_FALSE(r.ok);
   // GPS times that match no posed frame (another video's track).
   std::vector<GpsSample> late = f.gps;
   for (GpsSample& s : late) s.time_s += 1000;
