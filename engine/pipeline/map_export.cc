@@ -27,23 +27,41 @@ struct ModelCounts {
   std::int64_t points = 0;
 };
 
-// One model's trajectory.tum and points.ply from its submaps (ids ascending, so an overlap
-// frame comes from the earlier submap, unless that one posed it without landmark matches, by
-// rotation only during a hovering yaw, and a later one by PnP).
+// Frame index -> (frame_from_cam, posed by PnP) of the frames a model's submaps pose.
+using ChosenPoses = std::map<std::int64_t, std::pair<SE3, bool>>;
+
+// Adds the frame poses of `submap`, placed by `frame_from_submap`, to `poses`. Submaps are
+// added in id order, so an overlap frame keeps the earlier submap's pose, unless that one posed
+// it without landmark matches (by rotation only, during a hovering yaw) and this one by PnP.
+void AddFramePoses(const Submap& submap, const Sim3& frame_from_submap, ChosenPoses* poses) {
+  for (const FramePose& fp : submap.frame_poses) {
+    const bool by_pnp = fp.pnp_inliers > 0;
+    const auto [it, added] =
+        poses->try_emplace(fp.frame_index, WorldFromCam(frame_from_submap, fp.cam_from_submap), by_pnp);
+    if (!added && by_pnp && !it->second.second) {
+      it->second = {WorldFromCam(frame_from_submap, fp.cam_from_submap), true};
+    }
+  }
+}
+
+// The map's (connected) submaps in id order, placed in the world frame.
+std::vector<PlacedSubmap> MapSubmaps(const MapSnapshot& snapshot) {
+  std::vector<PlacedSubmap> map;
+  for (const SubmapPlacement& placement : snapshot.submaps) {
+    if (!placement.disconnected) map.push_back({placement.id, placement.world_from_submap});
+  }
+  std::sort(map.begin(), map.end(), [](const PlacedSubmap& a, const PlacedSubmap& b) { return a.id < b.id; });
+  return map;
+}
+
+// One model's trajectory.tum and points.ply from its submaps (ids ascending).
 ModelCounts WriteModel(const std::vector<PlacedSubmap>& placed, const fs::path& submaps_root,
                        const fs::path& dir, double fps) {
-  std::map<std::int64_t, std::pair<SE3, bool>> poses;  // frame index -> frame_from_cam, by PnP
+  ChosenPoses poses;
   std::vector<ColoredPoint> points;
   for (const PlacedSubmap& entry : placed) {
     const Submap submap = ReadSubmap(submaps_root, entry.id);
-    for (const FramePose& fp : submap.frame_poses) {
-      const bool by_pnp = fp.pnp_inliers > 0;
-      const auto [it, added] =
-          poses.try_emplace(fp.frame_index, WorldFromCam(entry.frame_from_submap, fp.cam_from_submap), by_pnp);
-      if (!added && by_pnp && !it->second.second) {
-        it->second = {WorldFromCam(entry.frame_from_submap, fp.cam_from_submap), true};
-      }
-    }
+    AddFramePoses(submap, entry.frame_from_submap, &poses);
     points.reserve(points.size() + submap.landmarks.size());
     for (const Landmark& lm : submap.landmarks) {
       ColoredPoint p;
@@ -69,42 +87,26 @@ SE3 WorldFromCam(const Sim3& world_from_submap, const SE3& cam_from_submap) {
 }
 
 std::map<std::int64_t, Eigen::Vector3d> WorldCameraCentres(const MapSnapshot& snapshot, const fs::path& submaps_root) {
-  std::vector<const SubmapPlacement*> connected;
-  for (const SubmapPlacement& placement : snapshot.submaps) {
-    if (!placement.disconnected) connected.push_back(&placement);
+  ChosenPoses poses;
+  for (const PlacedSubmap& entry : MapSubmaps(snapshot)) {
+    AddFramePoses(ReadSubmap(submaps_root, entry.id), entry.frame_from_submap, &poses);
   }
-  std::sort(connected.begin(), connected.end(),
-            [](const SubmapPlacement* a, const SubmapPlacement* b) { return a->id < b->id; });
-  std::map<std::int64_t, std::pair<Eigen::Vector3d, bool>> centres;  // frame -> centre, by PnP
-  for (const SubmapPlacement* placement : connected) {
-    const Submap submap = ReadSubmap(submaps_root, placement->id);
-    for (const FramePose& fp : submap.frame_poses) {
-      const bool by_pnp = fp.pnp_inliers > 0;
-      const Eigen::Vector3d centre = placement->world_from_submap * fp.cam_from_submap.Inverse().translation();
-      const auto [it, added] = centres.try_emplace(fp.frame_index, centre, by_pnp);
-      if (!added && by_pnp && !it->second.second) it->second = {centre, true};
-    }
-  }
-  std::map<std::int64_t, Eigen::Vector3d> out;
-  for (const auto& [index, centre] : centres) out.emplace(index, centre.first);
-  return out;
+  std::map<std::int64_t, Eigen::Vector3d> centres;
+  for (const auto& [index, pose] : poses) centres.emplace(index, pose.first.translation());
+  return centres;
 }
 
 MapExportCounts ExportWorldMap(const MapSnapshot& snapshot, const fs::path& submaps_root,
                                const fs::path& out_dir, double fps) {
   MapExportCounts counts;
-  std::vector<PlacedSubmap> map;
+  const std::vector<PlacedSubmap> map = MapSubmaps(snapshot);
   std::map<int, std::vector<const SubmapPlacement*>> parts;  // part -> submaps, ids ascending
   std::vector<const SubmapPlacement*> sorted;
   for (const SubmapPlacement& placement : snapshot.submaps) sorted.push_back(&placement);
   std::sort(sorted.begin(), sorted.end(),
             [](const SubmapPlacement* a, const SubmapPlacement* b) { return a->id < b->id; });
   for (const SubmapPlacement* placement : sorted) {
-    if (placement->disconnected) {
-      parts[placement->part].push_back(placement);
-    } else {
-      map.push_back({placement->id, placement->world_from_submap});
-    }
+    if (placement->disconnected) parts[placement->part].push_back(placement);
   }
   const ModelCounts written = WriteModel(map, submaps_root, out_dir, fps);
   counts.frames_posed = written.frames_posed;

@@ -47,15 +47,15 @@ struct MapExportCounts {
   std::vector<PartExport> parts;
 };
 
-// Writes trajectory.tum (t = frame index / fps; a frame posed by two submaps, i.e. in an
-// overlap, is written once, from the earlier submap) and points.ply into out_dir, and each
-// disconnected part into out_dir/parts/<n>/ (the parts/ folder is replaced, so a re-run never
-// leaves parts of an earlier run behind).
 // World camera centres of the map's frames (connected submaps; an overlap frame from the
 // earlier submap, a PnP pose before a rotation-only one, as in trajectory.tum).
 std::map<std::int64_t, Eigen::Vector3d> WorldCameraCentres(const MapSnapshot& snapshot,
                                                            const std::filesystem::path& submaps_root);
 
+// Writes trajectory.tum (t = frame index / fps; a frame posed by two submaps, i.e. in an
+// overlap, is written once, from the earlier submap unless only the later one posed it by
+// PnP) and points.ply into out_dir, and each disconnected part into out_dir/parts/<n>/ (the
+// parts/ folder is replaced, so a re-run never leaves parts of an earlier run behind).
 MapExportCounts ExportWorldMap(const MapSnapshot& snapshot, const std::filesystem::path& submaps_root,
                                const std::filesystem::path& out_dir, double fps);
 
