@@ -80,6 +80,9 @@ json BuildTileset(const MapSnapshot& snapshot, const std::map<std::uint32_t, Eig
   // children as soon as the map is on screen.
   root["geometricError"] = std::max(world.diagonal().norm(), 1.0);
   root["refine"] = "ADD";
+  // A georeferenced map: the root's transform puts the east-north-up world on the globe; the
+  // root box and the children's transforms stay in world coordinates beneath it.
+  if (snapshot.ecef_from_world) root["transform"] = ColumnMajor(*snapshot.ecef_from_world);
   if (!children.empty()) root["children"] = std::move(children);
 
   json tileset;

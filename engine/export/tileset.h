@@ -8,6 +8,9 @@
 // and the transform are plain submap / world coordinates), geometricError 0 (a leaf holds all
 // the detail there is), refine "ADD" and extras {submap, disconnected, first_frame,
 // last_frame}. asset.tilesetVersion is the revision as a string and extras.revision the number.
+// A georeferenced snapshot (MapSnapshot::ecef_from_world) gives the root a `transform`, ECEF
+// from the east-north-up world, so globe clients (CesiumJS) show the map where it was flown;
+// GLAM's own viewer ignores the root transform and shows the local frame.
 //
 // Because tiles never change after their submap completes, a new alignment result rewrites
 // this small file only. Tiles are therefore served as immutable; but a job mapped again from

@@ -55,4 +55,11 @@ Geodetic EnuFrame::GeodeticFromEnu(const Eigen::Vector3d& enu) const {
   return GeodeticFromEcef(origin_ecef_ + enu_from_ecef_.transpose() * enu);
 }
 
+Eigen::Matrix4d EnuFrame::EcefFromEnu() const {
+  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+  m.topLeftCorner<3, 3>() = enu_from_ecef_.transpose();
+  m.topRightCorner<3, 1>() = origin_ecef_;
+  return m;
+}
+
 }  // namespace glam

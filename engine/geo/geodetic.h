@@ -26,6 +26,9 @@ class EnuFrame {
   explicit EnuFrame(const Geodetic& origin);
   Eigen::Vector3d EnuFromGeodetic(const Geodetic& g) const;
   Geodetic GeodeticFromEnu(const Eigen::Vector3d& enu) const;
+  // The rigid 4x4 taking ENU coordinates of this frame to earth-centred ones (metres): what a
+  // 3D Tiles root `transform` holds to put an east-north-up tileset on the globe.
+  Eigen::Matrix4d EcefFromEnu() const;
   const Geodetic& origin() const { return origin_; }
 
  private:

@@ -6,7 +6,10 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <vector>
+
+#include <Eigen/Core>
 
 #include "engine/core/sim3.h"
 
@@ -31,6 +34,11 @@ struct SubmapPlacement {
 struct MapSnapshot {
   std::int64_t revision = 0;
   std::vector<SubmapPlacement> submaps;  // in order of completion (ids ascending)
+  // Where the world frame sits on the earth, once the map is georeferenced (engine/geo: the
+  // world is then metres, east-north-up): the rigid map from world to earth-centred (ECEF)
+  // coordinates. tileset.json writes it as its root transform, so 3D Tiles clients that show
+  // a globe place the map where it was flown. Unset for maps in their own frame.
+  std::optional<Eigen::Matrix4d> ecef_from_world;
 };
 
 }  // namespace glam

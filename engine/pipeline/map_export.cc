@@ -27,23 +27,6 @@ struct ModelCounts {
   std::int64_t points = 0;
 };
 
-// Frame index -> (frame_from_cam, posed by PnP) of the frames a model's submaps pose.
-using ChosenPoses = std::map<std::int64_t, std::pair<SE3, bool>>;
-
-// Adds the frame poses of `submap`, placed by `frame_from_submap`, to `poses`. Submaps are
-// added in id order, so an overlap frame keeps the earlier submap's pose, unless that one posed
-// it without landmark matches (by rotation only, during a hovering yaw) and this one by PnP.
-void AddFramePoses(const Submap& submap, const Sim3& frame_from_submap, ChosenPoses* poses) {
-  for (const FramePose& fp : submap.frame_poses) {
-    const bool by_pnp = fp.pnp_inliers > 0;
-    const auto [it, added] =
-        poses->try_emplace(fp.frame_index, WorldFromCam(frame_from_submap, fp.cam_from_submap), by_pnp);
-    if (!added && by_pnp && !it->second.second) {
-      it->second = {WorldFromCam(frame_from_submap, fp.cam_from_submap), true};
-    }
-  }
-}
-
 // The map's (connected) submaps in id order, placed in the world frame.
 std::vector<PlacedSubmap> MapSubmaps(const MapSnapshot& snapshot) {
   std::vector<PlacedSubmap> map;
@@ -79,6 +62,17 @@ ModelCounts WriteModel(const std::vector<PlacedSubmap>& placed, const fs::path& 
 }
 
 }  // namespace
+
+void AddFramePoses(const Submap& submap, const Sim3& frame_from_submap, ChosenPoses* poses) {
+  for (const FramePose& fp : submap.frame_poses) {
+    const bool by_pnp = fp.pnp_inliers > 0;
+    const auto [it, added] =
+        poses->try_emplace(fp.frame_index, WorldFromCam(frame_from_submap, fp.cam_from_submap), by_pnp);
+    if (!added && by_pnp && !it->second.second) {
+      it->second = {WorldFromCam(frame_from_submap, fp.cam_from_submap), true};
+    }
+  }
+}
 
 SE3 WorldFromCam(const Sim3& world_from_submap, const SE3& cam_from_submap) {
   const SE3 submap_from_cam = cam_from_submap.Inverse();

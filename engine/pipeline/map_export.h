@@ -17,11 +17,13 @@
 #include <cstdint>
 #include <filesystem>
 #include <map>
+#include <utility>
 #include <vector>
 
 #include "engine/core/se3.h"
 #include "engine/core/sim3.h"
 #include "engine/map/map_snapshot.h"
+#include "engine/map/submap.h"
 
 namespace glam {
 
@@ -29,6 +31,16 @@ namespace glam {
 // R_world_from_submap * R_submap_from_cam and the translation is the Sim3 applied to the
 // camera centre (the camera's world position).
 SE3 WorldFromCam(const Sim3& world_from_submap, const SE3& cam_from_submap);
+
+// Frame index -> (frame_from_cam, posed by PnP) of the frames a model's submaps pose.
+using ChosenPoses = std::map<std::int64_t, std::pair<SE3, bool>>;
+
+// Adds the frame poses of `submap`, placed by `frame_from_submap`, to `poses`: the one rule
+// for which submap's pose an overlap frame gets, in every output (trajectory.tum, map.glb's
+// camera path, the georeference's camera centres). Submaps are added in id order, so an
+// overlap frame keeps the earlier submap's pose, unless that one posed it without landmark
+// matches (by rotation only, during a hovering yaw) and this one by PnP.
+void AddFramePoses(const Submap& submap, const Sim3& frame_from_submap, ChosenPoses* poses);
 
 // One disconnected part written to parts/<number>/.
 struct PartExport {

@@ -23,6 +23,7 @@
 #include "engine/alignment/vocabulary_tree.h"
 #include "engine/pipeline/alignment_thread.h"
 #include "engine/geo/exif_gps.h"
+#include "engine/geo/geodetic.h"
 #include "engine/geo/gps_track.h"
 #include "engine/pipeline/map_export.h"
 #include "engine/pipeline/resume_checkpoint.h"
@@ -339,13 +340,15 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
         FitGeoreference(WorldCameraCentres(*snapshot, submaps_root), report.fps, *gps, options.georeference);
     const GeoreferenceResult& geo = report.georeference;
     if (geo.ok) {
-      // The map moves into metres, east-north-up: one more revision of every connected
-      // placement (disconnected parts keep their own frames).
+      // The map moves into metres, east-north-up: one more revision of every placement (a
+      // disconnected submap's guessed placement moves with the map; the parts' own frames,
+      // part_from_submap, stay), now with where that frame sits on the earth.
       auto georeferenced = std::make_shared<MapSnapshot>(*snapshot);
       georeferenced->revision = snapshot->revision + 1;
       for (SubmapPlacement& placement : georeferenced->submaps) {
-        if (!placement.disconnected) placement.world_from_submap = geo.enu_from_world * placement.world_from_submap;
+        placement.world_from_submap = geo.enu_from_world * placement.world_from_submap;
       }
+      georeferenced->ecef_from_world = EnuFrame(geo.origin).EcefFromEnu();
       snapshot = std::move(georeferenced);
       GLAM_LOG_INFO("georeferenced with {} of {} GPS positions ({} fit, rms {:.2f} m over {:.0f} m, {:.4g} m per map unit)",
                     geo.samples_used, geo.samples_matched, geo.full ? "similarity" : "yaw-scale-offset", geo.rms_m,

@@ -10,6 +10,7 @@
 #include "engine/core/logging.h"
 #include "engine/export/tileset.h"
 #include "engine/map/submap_io.h"
+#include "engine/pipeline/map_export.h"
 
 namespace glam {
 namespace {
@@ -91,7 +92,7 @@ void TileWriter::OnRevision(const MapSnapshot& snapshot) {
 
 std::int64_t TileWriter::WriteMapGlb(const MapSnapshot& snapshot, const std::filesystem::path& submaps_root) {
   TileGeometry world;
-  std::map<std::int64_t, Eigen::Vector3f> centres;  // frame index -> camera centre (first submap wins)
+  ChosenPoses poses;  // the camera path: one pose per frame, as in trajectory.tum
   for (const SubmapPlacement& placement : snapshot.submaps) {
     if (placement.disconnected) continue;
     const Submap submap = ReadSubmap(submaps_root, placement.id);
@@ -102,12 +103,9 @@ std::int64_t TileWriter::WriteMapGlb(const MapSnapshot& snapshot, const std::fil
       p.color = lm.color;
       world.points.push_back(p);
     }
-    for (const FramePose& fp : submap.frame_poses) {
-      const Eigen::Vector3d centre = placement.world_from_submap * fp.cam_from_submap.Inverse().translation();
-      centres.try_emplace(fp.frame_index, centre.cast<float>());
-    }
+    AddFramePoses(submap, placement.world_from_submap, &poses);
   }
-  for (const auto& [index, centre] : centres) world.trajectory.push_back(centre);
+  for (const auto& [index, pose] : poses) world.trajectory.push_back(pose.first.translation().cast<float>());
   const std::string glb = EncodeDracoTileGlb(world, draco_);
   std::lock_guard lock(mutex_);
   WriteFileAtomically(out_dir_ / "map.glb", glb);

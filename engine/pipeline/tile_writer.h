@@ -48,7 +48,8 @@ class TileWriter {
   void OnRevision(const MapSnapshot& snapshot);
 
   // map.glb: the connected submaps' points and camera centres in the world frame (Draco, the
-  // same quantisation rule as tiles, over the whole map's box). Disconnected submaps are left
+  // same quantisation rule as tiles, over the whole map's box); an overlap frame's centre comes
+  // from the submap trajectory.tum takes it from (AddFramePoses). Disconnected submaps are left
   // out, as in points.ply. Returns the number of points written.
   std::int64_t WriteMapGlb(const MapSnapshot& snapshot, const std::filesystem::path& submaps_root);
 

@@ -43,6 +43,7 @@ Submap MakeSubmap(std::uint32_t id, int landmarks, unsigned seed) {
     const Eigen::Vector3d centre(0.3 * static_cast<double>(f - s.first_frame), 0, 0);
     const SO3 R(Eigen::Matrix3d(Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX())));
     fp.cam_from_submap = SE3(R, -(R.matrix() * centre));
+    fp.pnp_inliers = 100;
     s.frame_poses.push_back(fp);
   }
   return s;
@@ -180,7 +181,11 @@ TEST(TileWriter, ResumedWriterRecoversEarlierSubmapsFromDisk) {
 
 TEST(TileWriter, MapGlbHoldsTheConnectedSubmapsInWorldFrame) {
   const fs::path dir = glam::testing::FreshTempDir("tile_writer_map");
-  const std::vector<Submap> submaps = {MakeSubmap(0, 400, 8), MakeSubmap(1, 300, 9), MakeSubmap(2, 200, 10)};
+  std::vector<Submap> submaps = {MakeSubmap(0, 400, 8), MakeSubmap(1, 300, 9), MakeSubmap(2, 200, 10)};
+  // Submap 0 posed overlap frames 50..54 by rotation only (a hovering yaw), submap 1 by PnP.
+  for (FramePose& fp : submaps[0].frame_poses) {
+    if (fp.frame_index >= 50 && fp.frame_index <= 54) fp.pnp_inliers = 0;
+  }
   for (const Submap& s : submaps) WriteSubmap(s, dir / "submaps");
   MapSnapshot snapshot;
   snapshot.revision = 3;
@@ -207,8 +212,22 @@ TEST(TileWriter, MapGlbHoldsTheConnectedSubmapsInWorldFrame) {
     const Eigen::Vector3f want = world[p.color[2] == 0 ? index : 400 + index].position;
     EXPECT_LE((p.position - want).cwiseAbs().maxCoeff(), bound);
   }
-  // One camera centre per frame; submaps 0 and 1 overlap in frames 50..59.
-  EXPECT_EQ(glam::testing::TrajectoryPoints(model).size(), 110u);
+  // One camera centre per frame; submaps 0 and 1 overlap in frames 50..59, where the centre is
+  // the one trajectory.tum has (AddFramePoses): submap 0's where it posed by PnP, submap 1's
+  // where submap 0 posed by rotation only.
+  const std::vector<Eigen::Vector3f> path = glam::testing::TrajectoryPoints(model);
+  ASSERT_EQ(path.size(), 110u);
+  const auto centre = [&](std::size_t submap, std::int64_t frame) {
+    const FramePose& fp = submaps[submap].frame_poses[static_cast<std::size_t>(frame - submaps[submap].first_frame)];
+    return (snapshot.submaps[submap].world_from_submap * fp.cam_from_submap.Inverse().translation()).cast<float>().eval();
+  };
+  for (const std::int64_t frame : {std::int64_t{20}, std::int64_t{57}, std::int64_t{59}}) {
+    EXPECT_LE((path[static_cast<std::size_t>(frame)] - centre(0, frame)).norm(), 1e-3f) << frame;
+  }
+  for (const std::int64_t frame : {std::int64_t{50}, std::int64_t{54}, std::int64_t{80}}) {
+    EXPECT_LE((path[static_cast<std::size_t>(frame)] - centre(1, frame)).norm(), 1e-3f) << frame;
+  }
+  EXPECT_GT((centre(0, 52) - centre(1, 52)).norm(), 1.0f);  // the two submaps' poses differ there
   fs::remove_all(dir);
 }
 

@@ -145,6 +145,37 @@ TEST(Tileset, BoundingVolumesContainThePoints) {
   }
 }
 
+TEST(Tileset, AGeoreferencedMapGetsARootTransformOntoTheGlobe) {
+  Fixture f = MakeFixture();
+  // A map in its own frame has no root transform: clients show it as it is.
+  EXPECT_FALSE(BuildTileset(f.snapshot, f.bounds, TileVariant::kDraco)["root"].contains("transform"));
+  // Georeferenced: ECEF from the east-north-up world (a rotation and a translation of earth
+  // radius size, as EnuFrame::EcefFromEnu gives).
+  Eigen::Matrix4d ecef_from_world = Eigen::Matrix4d::Identity();
+  ecef_from_world.topLeftCorner<3, 3>() =
+      Eigen::AngleAxisd(0.7, Eigen::Vector3d(0.2, -0.5, 0.8).normalized()).toRotationMatrix();
+  ecef_from_world.topRightCorner<3, 1>() = Eigen::Vector3d(4.3e6, 0.6e6, 4.6e6);
+  f.snapshot.ecef_from_world = ecef_from_world;
+  for (const TileVariant variant : {TileVariant::kDraco, TileVariant::kQuantized}) {
+    const json tileset = BuildTileset(f.snapshot, f.bounds, variant);
+    const Eigen::Matrix4d root = FromColumnMajor(tileset["root"]["transform"]);
+    EXPECT_TRUE(root.isApprox(ecef_from_world, 1e-15));
+    // 3D Tiles composes transforms down the tree: root * child takes a tile point to ECEF.
+    for (std::size_t i = 0; i < f.snapshot.submaps.size(); ++i) {
+      const SubmapPlacement& placement = f.snapshot.submaps[i];
+      const Eigen::Matrix4d child = FromColumnMajor(tileset["root"]["children"][i]["transform"]);
+      EXPECT_TRUE(child.isApprox(placement.world_from_submap.matrix(), 1e-15));  // unchanged
+      const Eigen::Vector3d p = f.points.at(placement.id).front();
+      const Eigen::Vector3d expected = (ecef_from_world * (placement.world_from_submap * p).homogeneous()).head<3>();
+      EXPECT_LT(((root * child * p.homogeneous()).head<3>() - expected).norm(), 1e-6);
+    }
+    // The root box stays in world coordinates, under the root transform (3D Tiles: a tile's
+    // bounding volume is in its own frame, after its transform).
+    const json& root_box = tileset["root"]["boundingVolume"]["box"];
+    EXPECT_TRUE(InBox(root_box, f.snapshot.submaps[0].world_from_submap * f.points.at(0).front()));
+  }
+}
+
 TEST(Tileset, EmptySubmapsAndEmptySnapshots) {
   Fixture f = MakeFixture();
   f.bounds[1] = Eigen::AlignedBox3d();  // submap 1 has no points

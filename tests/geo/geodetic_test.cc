@@ -1,5 +1,6 @@
 #include "engine/geo/geodetic.h"
 
+#include <Eigen/LU>
 #include <gtest/gtest.h>
 
 namespace glam {
@@ -39,6 +40,23 @@ TEST(Geodetic, EnuAxesPointEastNorthUp) {
   EXPECT_NEAR(east.x(), 76.0, 0.3);
   EXPECT_NEAR(east.y(), 0.0, 0.01);
   EXPECT_NEAR(frame.EnuFromGeodetic({47.0, 8.0, 410}).z(), 10.0, 1e-6);
+}
+
+TEST(Geodetic, EcefFromEnuIsTheRigidMapOfTheFrame) {
+  const EnuFrame frame({-33.86, 151.21, 20});
+  const Eigen::Matrix4d ecef_from_enu = frame.EcefFromEnu();
+  // Rigid: an orthonormal rotation, no scale, the bottom row of a homogeneous transform.
+  const Eigen::Matrix3d r = ecef_from_enu.topLeftCorner<3, 3>();
+  EXPECT_LT((r.transpose() * r - Eigen::Matrix3d::Identity()).norm(), 1e-12);
+  EXPECT_NEAR(r.determinant(), 1.0, 1e-12);
+  EXPECT_EQ(ecef_from_enu.row(3), Eigen::RowVector4d(0, 0, 0, 1));
+  // It agrees with the geodetic conversions: any ENU point lands on its own ECEF position.
+  for (const Eigen::Vector3d& enu : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(250, -40, 60)}) {
+    const Eigen::Vector3d ecef = r * enu + ecef_from_enu.topRightCorner<3, 1>();
+    EXPECT_LT((ecef - EcefFromGeodetic(frame.GeodeticFromEnu(enu))).norm(), 1e-6);
+  }
+  // Up is the ellipsoid normal, pointing away from the earth's centre.
+  EXPECT_GT(r.col(2).dot(EcefFromGeodetic(frame.origin()).normalized()), 0.99);
 }
 
 }  // namespace

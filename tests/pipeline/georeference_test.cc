@@ -64,12 +64,29 @@ TEST(GeoreferenceEndToEnd, AVideoWithItsSrtIsMappedInMetresEastNorthUp) {
   const Geodetic first = EnuFrame(kOrigin).GeodeticFromEnu(shift);
   EXPECT_NEAR(j["georeference"]["origin"]["latitude"].get<double>(), first.latitude_deg, 1e-7);
   EXPECT_NEAR(j["georeference"]["origin"]["longitude"].get<double>(), first.longitude_deg, 1e-7);
+  // tileset.json's root transform puts the map on the globe: a mapped camera centre taken to
+  // earth-centred coordinates through it lands where the drone truly was.
+  const nlohmann::json tileset = nlohmann::json::parse(std::ifstream(dir / "out" / "tileset.json"));
+  ASSERT_TRUE(tileset["root"].contains("transform"));
+  Eigen::Matrix4d ecef_from_world;
+  for (int k = 0; k < 16; ++k) ecef_from_world(k % 4, k / 4) = tileset["root"]["transform"][k].get<double>();
+  const EnuFrame synth_frame(kOrigin);
+  double ecef_sum = 0;
+  for (const TimedPose& p : mapped) {
+    const auto index = static_cast<std::size_t>(std::llround(p.timestamp * 30));
+    const Eigen::Vector3d ecef = (ecef_from_world * p.world_from_cam.translation().homogeneous()).head<3>();
+    const Eigen::Vector3d truth_ecef =
+        EcefFromGeodetic(synth_frame.GeodeticFromEnu(truth[index].world_from_cam.translation()));
+    ecef_sum += (ecef - truth_ecef).squaredNorm();
+  }
+  EXPECT_LT(std::sqrt(ecef_sum / static_cast<double>(mapped.size())), 0.6);
   // Without the sidecar (or with --no-gps) the same video is not georeferenced.
   MappingOptions no_gps;
   no_gps.find_gps = false;
   const MappingReport plain = RunMapping(dir / "DJI_0001.MP4", dir / "plain", no_gps);
   EXPECT_TRUE(plain.gps_track.empty());
   EXPECT_FALSE(plain.georeference.ok);
+  EXPECT_FALSE(nlohmann::json::parse(std::ifstream(dir / "plain" / "tileset.json"))["root"].contains("transform"));
 }
 
 TEST(GeoreferenceEndToEnd, AnUnusableSidecarWarnsAndAGivenOneMustParse) {
