@@ -17,11 +17,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct PlacedSubmap {
-  std::uint32_t id = 0;
-  Sim3 frame_from_submap;  // into the frame of the model being written
-};
-
 struct ModelCounts {
   std::int64_t frames_posed = 0;
   std::int64_t points = 0;
@@ -80,9 +75,10 @@ SE3 WorldFromCam(const Sim3& world_from_submap, const SE3& cam_from_submap) {
              world_from_submap * submap_from_cam.translation());
 }
 
-std::map<std::int64_t, Eigen::Vector3d> WorldCameraCentres(const MapSnapshot& snapshot, const fs::path& submaps_root) {
+std::map<std::int64_t, Eigen::Vector3d> CameraCentres(const std::vector<PlacedSubmap>& placed,
+                                                      const fs::path& submaps_root) {
   ChosenPoses poses;
-  for (const PlacedSubmap& entry : MapSubmaps(snapshot)) {
+  for (const PlacedSubmap& entry : placed) {
     AddFramePoses(ReadSubmap(submaps_root, entry.id), entry.frame_from_submap, &poses);
   }
   std::map<std::int64_t, Eigen::Vector3d> centres;
@@ -90,54 +86,62 @@ std::map<std::int64_t, Eigen::Vector3d> WorldCameraCentres(const MapSnapshot& sn
   return centres;
 }
 
-MapExportCounts ExportWorldMap(const MapSnapshot& snapshot, const fs::path& submaps_root,
-                               const fs::path& out_dir, double fps) {
-  MapExportCounts counts;
-  const std::vector<PlacedSubmap> map = MapSubmaps(snapshot);
-  std::map<int, std::vector<const SubmapPlacement*>> parts;  // part -> submaps, ids ascending
+std::map<std::int64_t, Eigen::Vector3d> WorldCameraCentres(const MapSnapshot& snapshot, const fs::path& submaps_root) {
+  return CameraCentres(MapSubmaps(snapshot), submaps_root);
+}
+
+std::vector<PartModel> DisconnectedParts(const MapSnapshot& snapshot, const fs::path& submaps_root) {
+  std::map<int, std::vector<const SubmapPlacement*>> members_of;  // part -> submaps, ids ascending
   std::vector<const SubmapPlacement*> sorted;
   for (const SubmapPlacement& placement : snapshot.submaps) sorted.push_back(&placement);
   std::sort(sorted.begin(), sorted.end(),
             [](const SubmapPlacement* a, const SubmapPlacement* b) { return a->id < b->id; });
   for (const SubmapPlacement* placement : sorted) {
-    if (placement->disconnected) parts[placement->part].push_back(placement);
+    if (placement->disconnected) members_of[placement->part].push_back(placement);
   }
+  std::vector<PartModel> parts;
+  for (const auto& [unused, members] : members_of) {
+    PartModel part;
+    part.first_frame = members.front()->first_frame;
+    // The part's frame: its first submap levelled, like the world frame of the map.
+    const Sim3 levelled_from_part =
+        LevelPart(ReadSubmap(submaps_root, members.front()->id), members.front()->part_from_submap);
+    for (const SubmapPlacement* p : members) {
+      part.submaps.push_back({p->id, levelled_from_part * p->part_from_submap});
+      part.first_frame = std::min(part.first_frame, p->first_frame);
+      part.last_frame = std::max(part.last_frame, p->last_frame);
+    }
+    parts.push_back(std::move(part));
+  }
+  std::stable_sort(parts.begin(), parts.end(),
+                   [](const PartModel& a, const PartModel& b) { return a.first_frame < b.first_frame; });
+  return parts;
+}
+
+MapExportCounts ExportWorldMap(const MapSnapshot& snapshot, const fs::path& submaps_root,
+                               const fs::path& out_dir, double fps) {
+  MapExportCounts counts;
+  const std::vector<PlacedSubmap> map = MapSubmaps(snapshot);
   const ModelCounts written = WriteModel(map, submaps_root, out_dir, fps);
   counts.frames_posed = written.frames_posed;
   counts.points = written.points;
   counts.submaps_exported = static_cast<std::int64_t>(map.size());
 
   // Parts, numbered by their first frame.
-  std::vector<std::pair<std::int64_t, std::vector<const SubmapPlacement*>>> ordered;  // first frame, submaps
-  for (auto& [unused, members] : parts) {
-    std::int64_t first = members.front()->first_frame;
-    for (const SubmapPlacement* p : members) first = std::min(first, p->first_frame);
-    ordered.emplace_back(first, std::move(members));
-  }
-  std::sort(ordered.begin(), ordered.end(),
-            [](const auto& a, const auto& b) { return a.first < b.first; });
   const fs::path parts_dir = out_dir / "parts";
   std::error_code error;
   fs::remove_all(parts_dir, error);
   if (error) throw EnvironmentError("cannot replace " + parts_dir.string() + ": " + error.message());
-  for (std::size_t i = 0; i < ordered.size(); ++i) {
-    const std::vector<const SubmapPlacement*>& members = ordered[i].second;
+  for (const PartModel& model : DisconnectedParts(snapshot, submaps_root)) {
     PartExport part;
-    part.number = static_cast<int>(i) + 1;
-    part.first_frame = ordered[i].first;
-    // The part's frame: its first submap levelled, like the world frame of the map.
-    const Sim3 levelled_from_part =
-        LevelPart(ReadSubmap(submaps_root, members.front()->id), members.front()->part_from_submap);
-    std::vector<PlacedSubmap> placed;
-    for (const SubmapPlacement* p : members) {
-      placed.push_back({p->id, levelled_from_part * p->part_from_submap});
-      part.submaps.push_back(p->id);
-      part.last_frame = std::max(part.last_frame, p->last_frame);
-    }
+    part.number = static_cast<int>(counts.parts.size()) + 1;
+    part.first_frame = model.first_frame;
+    part.last_frame = model.last_frame;
+    for (const PlacedSubmap& p : model.submaps) part.submaps.push_back(p.id);
     const fs::path dir = parts_dir / std::to_string(part.number);
     fs::create_directories(dir, error);
     if (error) throw EnvironmentError("cannot create " + dir.string() + ": " + error.message());
-    const ModelCounts part_written = WriteModel(placed, submaps_root, dir, fps);
+    const ModelCounts part_written = WriteModel(model.submaps, submaps_root, dir, fps);
     part.frames_posed = part_written.frames_posed;
     part.points = part_written.points;
     counts.parts.push_back(std::move(part));

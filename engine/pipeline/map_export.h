@@ -42,6 +42,28 @@ using ChosenPoses = std::map<std::int64_t, std::pair<SE3, bool>>;
 // matches (by rotation only, during a hovering yaw) and this one by PnP.
 void AddFramePoses(const Submap& submap, const Sim3& frame_from_submap, ChosenPoses* poses);
 
+// A submap placed in the frame of a model (the map's world frame, or a part's own frame).
+struct PlacedSubmap {
+  std::uint32_t id = 0;
+  Sim3 frame_from_submap;
+};
+
+// A disconnected part of a snapshot: its submaps (ids ascending) in the part's own frame, which
+// is built like the world frame (its first submap levelled, z up) at the part's own scale.
+struct PartModel {
+  std::vector<PlacedSubmap> submaps;
+  std::int64_t first_frame = 0;
+  std::int64_t last_frame = 0;
+};
+
+// The snapshot's disconnected parts in order of their first frame (the numbering of parts/<n>).
+std::vector<PartModel> DisconnectedParts(const MapSnapshot& snapshot, const std::filesystem::path& submaps_root);
+
+// Camera centres by frame index of the placed submaps (ids ascending), in their model's frame,
+// one per frame by the rule of AddFramePoses.
+std::map<std::int64_t, Eigen::Vector3d> CameraCentres(const std::vector<PlacedSubmap>& placed,
+                                                      const std::filesystem::path& submaps_root);
+
 // One disconnected part written to parts/<number>/.
 struct PartExport {
   int number = 0;                      // 1-based, in order of first_frame

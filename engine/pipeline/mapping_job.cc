@@ -23,8 +23,8 @@
 #include "engine/alignment/vocabulary_tree.h"
 #include "engine/pipeline/alignment_thread.h"
 #include "engine/geo/exif_gps.h"
-#include "engine/geo/geodetic.h"
 #include "engine/geo/gps_track.h"
+#include "engine/pipeline/georeference_map.h"
 #include "engine/pipeline/map_export.h"
 #include "engine/pipeline/resume_checkpoint.h"
 #include "engine/pipeline/tile_writer.h"
@@ -336,24 +336,10 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   const auto write_start = Clock::now();
   std::shared_ptr<const MapSnapshot> snapshot = aligner.snapshot();
   if (gps) {
-    report.georeference =
-        FitGeoreference(WorldCameraCentres(*snapshot, submaps_root), report.fps, *gps, options.georeference);
-    const GeoreferenceResult& geo = report.georeference;
-    if (geo.ok) {
-      // The map moves into metres, east-north-up: one more revision of every placement (a
-      // disconnected submap's guessed placement moves with the map; the parts' own frames,
-      // part_from_submap, stay), now with where that frame sits on the earth.
-      auto georeferenced = std::make_shared<MapSnapshot>(*snapshot);
-      georeferenced->revision = snapshot->revision + 1;
-      for (SubmapPlacement& placement : georeferenced->submaps) {
-        placement.world_from_submap = geo.enu_from_world * placement.world_from_submap;
-      }
-      georeferenced->ecef_from_world = EnuFrame(geo.origin).EcefFromEnu();
-      snapshot = std::move(georeferenced);
-      GLAM_LOG_INFO("georeferenced with {} of {} GPS positions ({} fit, rms {:.2f} m over {:.0f} m, {:.4g} m per map unit)",
-                    geo.samples_used, geo.samples_matched, geo.full ? "similarity" : "yaw-scale-offset", geo.rms_m,
-                    geo.extent_m, geo.enu_from_world.scale());
-    }
+    MapGeoreference geo = GeoreferenceMap(*snapshot, submaps_root, report.fps, *gps, options.georeference);
+    report.georeference = geo.map;
+    report.georeferenced_parts = std::move(geo.parts);
+    if (geo.snapshot) snapshot = std::move(geo.snapshot);
   }
   const MapExportCounts exported = ExportWorldMap(*snapshot, submaps_root, out_dir, report.fps);
   tiles.OnRevision(*snapshot);

@@ -33,24 +33,43 @@ nlohmann::json AlignmentJson(const std::vector<SubmapAlignmentTiming>& timings) 
   return {{"mean_latency_s", mean}, {"max_latency_s", worst}, {"per_submap", per_submap}};
 }
 
-// null without a GPS track; otherwise whether and how the map was put in metres, ENU.
-nlohmann::json GeoreferenceJson(const std::string& track, const GeoreferenceResult& g) {
-  if (track.empty()) return nullptr;
-  nlohmann::json j = {{"gps_track", track}, {"ok", g.ok}};
+// The fields of one GPS fit (ok or not).
+nlohmann::json FitJson(const GeoreferenceResult& g, const char* scale_name) {
+  nlohmann::json j = {{"ok", g.ok}};
   if (!g.ok) {
     j["reason"] = g.reason;
     return j;
   }
-  j["frame"] = "ENU";
-  j["origin"] = {{"latitude", g.origin.latitude_deg},
-                 {"longitude", g.origin.longitude_deg},
-                 {"altitude", g.origin.altitude_m}};
   j["fit"] = g.full ? "similarity" : "yaw_scale_offset";
-  j["metres_per_map_unit"] = g.enu_from_world.scale();
+  j[scale_name] = g.enu_from_world.scale();
   j["samples_matched"] = g.samples_matched;
   j["samples_used"] = g.samples_used;
   j["rms_m"] = g.rms_m;
   j["extent_m"] = g.extent_m;
+  return j;
+}
+
+// null without a GPS track; otherwise whether and how the map was put in metres, ENU, and
+// which disconnected parts the GPS placed in it.
+nlohmann::json GeoreferenceJson(const std::string& track, const GeoreferenceResult& g,
+                                const std::vector<GpsPlacedPart>& parts) {
+  if (track.empty()) return nullptr;
+  nlohmann::json j = FitJson(g, "metres_per_map_unit");
+  j["gps_track"] = track;
+  if (!g.ok) return j;
+  j["frame"] = "ENU";
+  j["origin"] = {{"latitude", g.origin.latitude_deg},
+                 {"longitude", g.origin.longitude_deg},
+                 {"altitude", g.origin.altitude_m}};
+  nlohmann::json placed = nlohmann::json::array();
+  for (const GpsPlacedPart& part : parts) {
+    nlohmann::json p = FitJson(part.fit, "metres_per_part_unit");
+    p["submaps"] = part.submaps;
+    p["first_frame"] = part.first_frame;
+    p["last_frame"] = part.last_frame;
+    placed.push_back(std::move(p));
+  }
+  j["parts"] = std::move(placed);
   return j;
 }
 
@@ -119,6 +138,14 @@ std::vector<std::string> Diagnose(const MappingReport& r, int min_features) {
         r.parts.size() == 1 ? "it" : "them", r.parts.size() == 1 ? "it is" : "they are",
         r.parts.size() == 1 ? "its" : "their", r.parts.size() == 1 ? "its" : "their"));
   }
+  for (const GpsPlacedPart& part : r.georeferenced_parts) {
+    if (!part.fit.ok) continue;
+    warnings.push_back(fmt::format(
+        "frames {}-{} could not be linked to the rest of the map by the images; the GPS placed "
+        "them in it (fit rms {:.1f} m), so where they sit relative to the rest is only as "
+        "accurate as the GPS",
+        part.first_frame, part.last_frame, part.fit.rms_m));
+  }
   const double focal_change =
       r.free_focal_original && r.focal_original > 0 ? *r.free_focal_original / r.focal_original - 1.0 : 0.0;
   if (std::abs(focal_change) > kFixedFocalWarningFraction &&
@@ -185,7 +212,7 @@ nlohmann::json MappingReport::ToJson() const {
           {"processing_fps", processing_fps},
           {"processing_size", {processing_width, processing_height}},
           {"input_ended_early", input_ended_early},
-          {"georeference", GeoreferenceJson(gps_track, georeference)},
+          {"georeference", GeoreferenceJson(gps_track, georeference, georeferenced_parts)},
           {"warnings", warnings},
           {"timings_s",
            {{"decode_and_features", timings.decode_and_features_s},

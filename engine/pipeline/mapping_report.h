@@ -11,6 +11,7 @@
 
 #include "engine/alignment/submap_aligner.h"
 #include "engine/geo/georeference.h"
+#include "engine/pipeline/georeference_map.h"
 #include "engine/pipeline/map_export.h"
 
 namespace glam {
@@ -85,6 +86,9 @@ struct MappingReport {
   // none), and the fit (ok: the outputs are in metres, east-north-up around its origin).
   std::string gps_track;
   GeoreferenceResult georeference;
+  // The disconnected parts' own GPS fits (when the map was georeferenced): a part with an ok
+  // fit was placed in the map by it (engine/pipeline/georeference_map.h).
+  std::vector<GpsPlacedPart> georeferenced_parts;
   // Why frames or the whole input could not be mapped, in words for the user (also logged).
   // Bad footage (textureless, static, truncated) completes with these rather than failing:
   // the run did what the input allows, and the report says what is missing and why.

@@ -2,6 +2,7 @@
 // z up) with a DJI-style .SRT next to the video, made from the true camera positions plus
 // GPS-like noise. The map must come out in metres, east-north-up: its trajectory compared with
 // the truth directly, with no alignment at all.
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -87,6 +88,81 @@ TEST(GeoreferenceEndToEnd, AVideoWithItsSrtIsMappedInMetresEastNorthUp) {
   EXPECT_TRUE(plain.gps_track.empty());
   EXPECT_FALSE(plain.georeference.ok);
   EXPECT_FALSE(nlohmann::json::parse(std::ifstream(dir / "plain" / "tileset.json"))["root"].contains("transform"));
+}
+
+// RMS distance (m) of the mapped camera centres of frames [first, first + truth.size()) from
+// truth + shift (the mapped frame index minus `first` indexes the truth).
+double RmsAgainstTruth(const std::vector<TimedPose>& mapped, std::size_t first, const std::vector<TimedPose>& truth,
+                       const Eigen::Vector3d& shift, std::size_t* count) {
+  double sum = 0;
+  *count = 0;
+  for (const TimedPose& p : mapped) {
+    const auto index = static_cast<std::size_t>(std::llround(p.timestamp * 30));
+    if (index < first || index >= first + truth.size()) continue;
+    sum += (p.world_from_cam.translation() + shift - truth[index - first].world_from_cam.translation()).squaredNorm();
+    ++*count;
+  }
+  return *count > 0 ? std::sqrt(sum / static_cast<double>(*count)) : 1e9;
+}
+
+// A flight in two pieces: two flights over different ground joined by a hard cut, so no frame
+// after the cut sees anything before it and the images cannot link the pieces (without GPS the
+// second is written to parts/1 in its own frame), with one GPS track over both. Each piece is
+// fitted to the GPS on its own, into the same east-north-up frame: the whole flight comes out
+// as one map, each piece where it truly was.
+TEST(GeoreferenceEndToEnd, APieceTheImagesCannotLinkIsPlacedInTheMapByGps) {
+  const fs::path dir = glam::testing::FreshTempDir("georeference_pieces");
+  const fs::path clip_b = fs::path(GLAM_TEST_FIXTURES_DIR) / "lawnmower_seed4";
+  const std::string command = "ffmpeg -nostdin -v error -y -i '" + (kClip / "video.mp4").string() + "' -i '" +
+                              (clip_b / "video.mp4").string() +
+                              "' -filter_complex '[0:v][1:v]concat=n=2:v=1[v]' -map '[v]' -c:v libx264 -crf 16 '" +
+                              (dir / "two_pieces.mp4").string() + "'";
+  ASSERT_EQ(std::system(command.c_str()), 0) << command;
+  const std::vector<TimedPose> truth_a = ReadTumTrajectory(kClip / "gt_trajectory.tum");
+  std::vector<TimedPose> truth_b = ReadTumTrajectory(clip_b / "gt_trajectory.tum");
+  // The second piece was flown 150 m east and 80 m north of its synthetic world's origin.
+  const Eigen::Vector3d b_offset(150, 80, 0);
+  const double b_start = static_cast<double>(truth_a.size()) / 30;
+  std::vector<TimedPose> truth = truth_a;
+  for (TimedPose& p : truth_b) {
+    p.world_from_cam = SE3(p.world_from_cam.rotation(), p.world_from_cam.translation() + b_offset);
+    truth.push_back({p.timestamp + b_start, p.world_from_cam});
+  }
+  std::ofstream(dir / "two_pieces.SRT") << synth::DjiSrtFromTrajectory(truth, 1.0, 9);
+
+  const MappingReport report = RunMapping(dir / "two_pieces.mp4", dir / "out", MappingOptions{});
+  ASSERT_TRUE(report.georeference.ok) << report.georeference.reason;
+  // The images left the second piece disconnected; its own GPS fit placed it in the map.
+  ASSERT_EQ(report.georeferenced_parts.size(), 1u);
+  const GpsPlacedPart& part = report.georeferenced_parts.front();
+  ASSERT_TRUE(part.fit.ok) << part.fit.reason;
+  EXPECT_GE(part.first_frame, 270);  // the cut is at frame 300 (minus an overlap hand-off)
+  EXPECT_TRUE(report.parts.empty());
+  EXPECT_FALSE(fs::exists(dir / "out" / "parts" / "1"));
+  EXPECT_GT(report.frames_posed, 540);
+
+  // Both pieces in trajectory.tum, each where it was (no alignment: the ENU origin is the first
+  // fix, the first true position).
+  const std::vector<TimedPose> mapped = ReadTumTrajectory(dir / "out" / "trajectory.tum");
+  const Eigen::Vector3d shift = truth_a.front().world_from_cam.translation();
+  std::size_t count_a = 0, count_b = 0;
+  const double rms_a = RmsAgainstTruth(mapped, 0, truth_a, shift, &count_a);
+  std::vector<TimedPose> shifted_b(truth.begin() + static_cast<std::ptrdiff_t>(truth_a.size()), truth.end());
+  const double rms_b = RmsAgainstTruth(mapped, truth_a.size(), shifted_b, shift, &count_b);
+  std::cout << fmt::format("two pieces: first {:.3f} m rms over {} frames, second (placed by GPS) {:.3f} m over {} "
+                           "frames; fits {:.2f} / {:.2f} m\n",
+                           rms_a, count_a, rms_b, count_b, report.georeference.rms_m, part.fit.rms_m);
+  EXPECT_GT(count_a, 270u);
+  EXPECT_GT(count_b, 270u);
+  EXPECT_LT(rms_a, 0.6);
+  EXPECT_LT(rms_b, 0.8);
+  // The tiles show one map: no submap is marked disconnected any more.
+  const nlohmann::json tileset = nlohmann::json::parse(std::ifstream(dir / "out" / "tileset.json"));
+  for (const nlohmann::json& child : tileset["root"]["children"]) EXPECT_EQ(child["extras"]["disconnected"], false);
+  const nlohmann::json j = nlohmann::json::parse(std::ifstream(dir / "out" / "report.json"));
+  ASSERT_EQ(j["georeference"]["parts"].size(), 1u);
+  EXPECT_EQ(j["georeference"]["parts"][0]["ok"], true);
+  EXPECT_EQ(j["parts"].size(), 0u);
 }
 
 TEST(GeoreferenceEndToEnd, AnUnusableSidecarWarnsAndAGivenOneMustParse) {
