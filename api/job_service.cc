@@ -155,11 +155,13 @@ void JobService::CheckCanQueue() const {
 Job JobService::CreateJob(const fs::path& upload, const std::string& original_name,
                           const JobOptions& job_options, const std::string& telemetry) {
   json input_info;
+  const bool photos = fs::is_directory(upload);
   try {
     CheckCanQueue();
     input_info = options_.probe(upload);
   } catch (const InputError& e) {
     RemoveQuietly(upload);
+    if (photos) throw ApiError(422, "unsupported_images", fmt::format("no usable photos: {}", e.what()));
     throw ApiError(422, "unsupported_video", fmt::format("not a decodable video: {}", e.what()));
   } catch (...) {
     RemoveQuietly(upload);
@@ -167,7 +169,17 @@ Job JobService::CreateJob(const fs::path& upload, const std::string& original_na
   }
   std::error_code ec;
   input_info["filename"] = DisplayName(original_name);
-  input_info["size_bytes"] = static_cast<std::int64_t>(fs::file_size(upload, ec));
+  if (photos) {
+    std::int64_t bytes = 0, images = 0;
+    for (const fs::directory_entry& entry : fs::directory_iterator(upload, ec)) {
+      bytes += static_cast<std::int64_t>(entry.file_size(ec));
+      ++images;
+    }
+    input_info["size_bytes"] = bytes;
+    input_info["images"] = images;
+  } else {
+    input_info["size_bytes"] = static_cast<std::int64_t>(fs::file_size(upload, ec));
+  }
 
   Job job;
   do {
@@ -177,7 +189,7 @@ Job JobService::CreateJob(const fs::path& upload, const std::string& original_na
   job.state = JobState::kQueued;
   job.created_ms = job.updated_ms = NowMs();
   job.options = ToJson(job_options);
-  job.input_file = "input." + SafeExtension(original_name);
+  job.input_file = photos ? std::string(kImagesFolder) : "input." + SafeExtension(original_name);
   job.input_info = input_info;
   job.progress.stage = "queued";
 
@@ -447,6 +459,7 @@ void JobService::RunJob(const std::string& id, const CancellationToken& cancel) 
       return;
     }
     mapping_options.resume = job.resume;
+    if (job.input_file == kImagesFolder) mapping_options.sift.max_features = kPhotoFolderMaxFeatures;
     SetStateLocked(job, JobState::kRunning, std::nullopt, job.resume ? "resuming" : "");
   }
   GLAM_LOG_INFO("job {}: mapping started{}", id, job.resume ? " (resume)" : "");

@@ -40,6 +40,9 @@ namespace glam::api {
 // The job's GPS telemetry (multipart field "telemetry") inside DIR/jobs/<id>/: the sidecar
 // name of input.<ext> (engine/geo/gps_track.h), kept on restart like the video.
 inline constexpr const char* kTelemetryFile = "input.SRT";
+// A photo job's input (multipart fields "images"): a folder inside DIR/jobs/<id>/, mapped as a
+// photo folder (natural name order, EXIF GPS, kPhotoFolderMaxFeatures SIFT features).
+inline constexpr const char* kImagesFolder = "input";
 
 // Runs the engine for one job. The default calls RunMapping(job_dir/input_file, job_dir, ...).
 using JobExecutor = std::function<MappingReport(const Job& job, const std::filesystem::path& job_dir,
@@ -96,7 +99,9 @@ class JobService {
 
   // Takes ownership of `upload` (moved or removed on every path). Probes it (ApiError 422
   // "unsupported_video" if it is not a decodable video), moves it into DIR/jobs/<id>/ and
-  // queues the job. `original_name` gives the display name and file extension. `telemetry`:
+  // queues the job. `original_name` gives the display name and file extension. `upload` may
+  // also be a folder of photos (the server wrote every file name itself), which becomes
+  // kImagesFolder (422 "unsupported_images" when none of them decodes). `telemetry`:
   // the video's GPS track (DJI .SRT text, already validated), stored as kTelemetryFile beside
   // the video, where the engine finds it and georeferences the map; empty = none.
   Job CreateJob(const std::filesystem::path& upload, const std::string& original_name,

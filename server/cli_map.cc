@@ -40,13 +40,6 @@ struct MapArgs {
   MappingOptions options;
 };
 
-// SIFT features per frame for a folder of photos when --max-features is not given. Photos are
-// taken seconds apart: consecutive ones overlap by ~60-80 % instead of ~99 % for video, so far
-// fewer of a frame's features are matched, and tracking needs more to start from. On the
-// Brighton Beach sample (18 DJI photos) 2000 features registered 7 photos and 8000 registered
-// 16 (docs/benchmarks.md). The cost (~4x SIFT time per frame) does not matter for photo sets.
-constexpr int kPhotoFolderMaxFeatures = 8000;
-
 CancellationToken& InterruptToken() {
   static CancellationToken token;
   return token;

@@ -1,14 +1,22 @@
 // POST /api/v1/jobs: the body streams to DIR/uploads/<random>.part in chunks as it arrives
 // (never held in memory), the size limit is enforced while streaming, and only a complete,
 // probed file becomes a job. Every failure path removes the partial file.
+//
+// A photo job sends multipart fields "images" instead of "video" (one file each, e.g. a DJI
+// survey's JPEGs): they stream into a folder DIR/uploads/<random>.part/ under names the server
+// makes from the client's (directories and odd characters stripped, so "../../x.jpg" is
+// "x.jpg" inside the folder), the size limit counts them all, and the folder becomes the job's
+// input, mapped like `glam map FOLDER`.
 #include <unistd.h>
 
+#include <cctype>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <memory>
 #include <optional>
+#include <set>
 
 #include <fmt/format.h>
 
@@ -17,6 +25,7 @@
 #include "engine/geo/gps_track.h"
 #include "engine/core/error.h"
 #include "engine/core/logging.h"
+#include "engine/video/image_folder_source.h"
 #include "server/http_context.h"
 
 namespace glam::server {
@@ -28,6 +37,8 @@ using api::ApiError;
 constexpr std::size_t kMaxOptionsBytes = 64 * 1024;
 // A DJI .SRT has ~250 bytes per frame: 64 MiB holds ~2.5 hours of 30 fps telemetry.
 constexpr std::size_t kMaxTelemetryBytes = 64u << 20;
+// Photos per job: large surveys have a few thousand.
+constexpr std::size_t kMaxImages = 20000;
 
 // Counts an upload against max_concurrent_uploads for the lifetime of the request.
 class UploadSlot {
@@ -98,6 +109,47 @@ class TempUpload {
   int write_errno_ = 0;
   bool released_ = false;
 };
+
+// The folder of a photo upload; removed with everything in it unless Release()d.
+class TempFolder {
+ public:
+  explicit TempFolder(fs::path path) : path_(std::move(path)) {
+    std::error_code ec;
+    fs::create_directories(path_, ec);
+    if (ec) throw EnvironmentError(fmt::format("cannot create {}: {}", path_.string(), ec.message()));
+  }
+  ~TempFolder() {
+    if (released_) return;
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  TempFolder(const TempFolder&) = delete;
+  TempFolder& operator=(const TempFolder&) = delete;
+  const fs::path& path() const { return path_; }
+  const fs::path& Release() {
+    released_ = true;
+    return path_;
+  }
+
+ private:
+  fs::path path_;
+  bool released_ = false;
+};
+
+// The name a photo is stored under: the client's file name without any directory part, with
+// every character but letters, digits, '.', '-' and '_' replaced by '_' and no leading dot.
+// Empty when nothing is left or it lacks an image extension (.jpg, .png, .tif, ...).
+std::string SafeImageName(const std::string& client_name) {
+  const auto slash = client_name.find_last_of("/\\");
+  std::string name = slash == std::string::npos ? client_name : client_name.substr(slash + 1);
+  for (char& c : name) {
+    const bool ok = std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '.' || c == '-' || c == '_';
+    if (!ok) c = '_';
+  }
+  name.erase(0, name.find_first_not_of('.'));
+  if (name.size() > 200) name.erase(0, name.size() - 200);  // keeps the extension
+  return !name.empty() && HasImageExtension(name) ? name : std::string();
+}
 
 [[noreturn]] void ThrowWriteError(int error_number) {
   // EFBIG: the process file-size limit (RLIMIT_FSIZE) is a storage limit too.
@@ -176,9 +228,9 @@ void HandleCreateJob(Context& ctx, const httplib::Request& req, httplib::Respons
   try {
     if (!multipart && !raw) {
       throw ApiError(415, "unsupported_media_type",
-                     fmt::format("send the video as multipart/form-data (field \"video\") or as a raw "
-                                 "body with a video/* or application/octet-stream content type, not "
-                                 "\"{}\"",
+                     fmt::format("send the video as multipart/form-data (field \"video\", or photos as "
+                                 "fields \"images\") or as a raw body with a video/* or "
+                                 "application/octet-stream content type, not \"{}\"",
                                  content_type));
     }
     ctx.service.CheckCanQueue();
@@ -203,16 +255,36 @@ void HandleCreateJob(Context& ctx, const httplib::Request& req, httplib::Respons
   TempUpload upload(ctx.service.NewUploadPath());
   bool too_large = false;
   bool write_failed = false;
-  auto receive = [&](const char* data, std::size_t size) {
-    if (upload.bytes() + static_cast<std::int64_t>(size) > ctx.options.max_upload_bytes) {
+  int write_errno = 0;
+  std::int64_t received = 0;  // video or photo bytes so far, against max_upload_bytes
+  auto receive_into = [&](TempUpload& file, const char* data, std::size_t size) {
+    if (received + static_cast<std::int64_t>(size) > ctx.options.max_upload_bytes) {
       too_large = true;
       return false;
     }
-    if (!upload.Write(data, size)) {
+    if (!file.Write(data, size)) {
       write_failed = true;
+      write_errno = file.error_number();
       return false;
     }
+    received += static_cast<std::int64_t>(size);
     return true;
+  };
+  auto receive = [&](const char* data, std::size_t size) { return receive_into(upload, data, size); };
+  // A photo job: the folder and the photo being received.
+  std::optional<TempFolder> photos;
+  std::unique_ptr<TempUpload> photo;
+  std::set<std::string> photo_names;
+  auto close_photo = [&] {
+    if (!photo) return true;
+    const bool ok = photo->Close();
+    if (!ok) {
+      write_failed = true;
+      write_errno = photo->error_number();
+    }
+    photo->Release();  // the folder removes it on failure
+    photo.reset();
+    return ok;
   };
 
   std::string original_name;
@@ -226,11 +298,41 @@ void HandleCreateJob(Context& ctx, const httplib::Request& req, httplib::Respons
     bool have_options = false;
     bool options_too_long = false;
     bool telemetry_too_long = false;
+    std::string photo_error;  // why a photo part was refused
+    bool video_and_photos = false;
     read_ok = reader(
         [&](const httplib::MultipartFormData& part) {
           field = part.name;
+          if (field == "images") {
+            if (have_video) {
+              video_and_photos = true;
+              return false;
+            }
+            if (!close_photo()) return false;
+            if (photo_names.size() >= kMaxImages) {
+              photo_error = fmt::format("more than {} images in one job", kMaxImages);
+              return false;
+            }
+            const std::string name = SafeImageName(part.filename);
+            if (name.empty()) {
+              photo_error = fmt::format("\"{}\" is not named like an image (.jpg, .jpeg, .png, .tif, .tiff, "
+                                        ".bmp, .webp)", part.filename);
+              return false;
+            }
+            if (!photo_names.insert(name).second) {
+              photo_error = fmt::format("two images are named \"{}\"", name);
+              return false;
+            }
+            if (!photos) photos.emplace(ctx.service.NewUploadPath());
+            photo = std::make_unique<TempUpload>(photos->path() / name);
+            return true;
+          }
           if (field == "video") {
             if (have_video) return false;  // one video per job
+            if (photos) {
+              video_and_photos = true;
+              return false;
+            }
             have_video = true;
             original_name = part.filename.empty() ? ExtensionForContentType(part.content_type)
                                                   : part.filename;
@@ -243,6 +345,7 @@ void HandleCreateJob(Context& ctx, const httplib::Request& req, httplib::Respons
         },
         [&](const char* data, std::size_t size) {
           if (field == "video") return receive(data, size);
+          if (field == "images") return receive_into(*photo, data, size);
           if (field == "options") {
             if (options_text.size() + size > kMaxOptionsBytes) {
               options_too_long = true;
@@ -259,14 +362,27 @@ void HandleCreateJob(Context& ctx, const httplib::Request& req, httplib::Respons
           }
           return true;  // other fields are ignored
         });
+    if (read_ok) close_photo();
     if (options_too_long) throw ApiError(400, "bad_options", "the options field is larger than 64 KiB");
+    if (video_and_photos) {
+      res.set_header("Connection", "close");
+      throw ApiError(400, "bad_upload", "send either a \"video\" field or \"images\" fields, not both");
+    }
+    if (!photo_error.empty()) {
+      res.set_header("Connection", "close");
+      throw ApiError(400, "bad_image", photo_error);
+    }
     if (telemetry_too_long) {
       res.set_header("Connection", "close");
       throw ApiError(413, "payload_too_large",
                      fmt::format("the telemetry field is larger than {} MiB", kMaxTelemetryBytes >> 20));
     }
-    if (read_ok && !have_video) {
-      throw ApiError(400, "missing_video", "multipart upload without a \"video\" field");
+    if (read_ok && !have_video && !photos) {
+      throw ApiError(400, "missing_video", "multipart upload without a \"video\" field (or \"images\" fields)");
+    }
+    if (photos && !telemetry.empty()) {
+      throw ApiError(400, "bad_telemetry",
+                     "telemetry goes with a video; photos carry their GPS positions in their EXIF data");
     }
     if (have_options) options = api::ParseJobOptionsText(options_text);
     if (read_ok && !telemetry.empty()) {
@@ -289,7 +405,7 @@ void HandleCreateJob(Context& ctx, const httplib::Request& req, httplib::Respons
   }
   if (write_failed) {
     res.set_header("Connection", "close");
-    ThrowWriteError(upload.error_number());
+    ThrowWriteError(write_errno);
   }
   if (!read_ok) {
     res.set_header("Connection", "close");
@@ -298,6 +414,15 @@ void HandleCreateJob(Context& ctx, const httplib::Request& req, httplib::Respons
                      fmt::format("the upload exceeds the limit of {} bytes", ctx.options.max_upload_bytes));
     }
     throw ApiError(400, "bad_upload", "the request body could not be read completely");
+  }
+  if (photos) {
+    GLAM_LOG_DEBUG("upload of {} photos, {} bytes received", photo_names.size(), received);
+    const std::string display_name =
+        photo_names.size() == 1 ? *photo_names.begin() : fmt::format("{} photos", photo_names.size());
+    const api::Job job = ctx.service.CreateJob(photos->Release(), display_name, options);
+    res.set_header("Location", "/api/v1/jobs/" + job.id);
+    SendJson(res, 201, api::JobToJson(job));
+    return;
   }
   if (!upload.Close()) ThrowWriteError(upload.error_number());
   if (upload.bytes() == 0) throw ApiError(400, "empty_body", "the uploaded video is empty");

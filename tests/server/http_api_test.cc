@@ -8,11 +8,14 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <mutex>
 #include <regex>
 #include <set>
 #include <thread>
 
 #include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 #include "api/job_service.h"
 #include "engine/core/error.h"
@@ -48,8 +51,13 @@ class HttpApiTest : public ::testing::Test {
     api::JobServiceOptions service_options;
     service_options.data_dir = dir_ / "data";
     service_options.progress_interval = 0ms;
-    service_options.executor = [this](const api::Job&, const fs::path& d, const MappingOptions&,
+    service_options.executor = [this](const api::Job& job, const fs::path& d, const MappingOptions& o,
                                       const ProgressCallback& p, const CancellationToken& c) {
+      {
+        std::lock_guard lock(ran_mutex_);
+        ran_input_ = d / job.input_file;
+        ran_max_features_ = o.sift.max_features;
+      }
       engine_.Run(d, p, c);
       return report_;
     };
@@ -109,6 +117,9 @@ class HttpApiTest : public ::testing::Test {
   fs::path video_;
   glam::testing::FakeMapping engine_;
   MappingReport report_;  // what every run reports
+  std::mutex ran_mutex_;  // the input and SIFT budget the engine was last run with
+  fs::path ran_input_;
+  int ran_max_features_ = 0;
   std::string token_;
   std::unique_ptr<api::JobService> service_;
   std::unique_ptr<HttpServer> http_;
@@ -367,6 +378,81 @@ TEST_F(HttpApiTest, TelemetryIsStoredBesideTheVideo) {
   items[1].content = "1\n00:00:00,000 --> 00:00:01,000\nno positions\n";
   ExpectError(client.Post("/api/v1/jobs", items), 400, "bad_telemetry", "telemetry without positions");
   EXPECT_EQ(json::parse(client.Get("/api/v1/jobs")->body)["total"], jobs_before);
+}
+
+// A small textured PNG (the real upload probe decodes it).
+std::string PngPhoto(int seed) {
+  cv::Mat image(48, 64, CV_8UC3);
+  cv::RNG rng(static_cast<std::uint64_t>(seed));
+  rng.fill(image, cv::RNG::UNIFORM, cv::Scalar::all(0), cv::Scalar::all(255));
+  std::vector<unsigned char> bytes;
+  cv::imencode(".png", image, bytes);
+  return std::string(bytes.begin(), bytes.end());
+}
+
+TEST_F(HttpApiTest, PhotosUploadedAsImagesFieldsBecomeAPhotoFolderJob) {
+  Start({}, "photos");
+  auto client = Client();
+  httplib::MultipartFormDataItems items = {
+      {"images", PngPhoto(1), "flight/DJI_0002.png", "image/png"},
+      {"images", PngPhoto(2), "../../DJI_0001.png", "image/png"},  // a path trick: stays inside
+      {"images", PngPhoto(3), "DJI 0003.png", "image/png"},
+      {"options", R"({"name": "survey"})", "", "application/json"}};
+  auto res = client.Post("/api/v1/jobs", items);
+  ASSERT_TRUE(res);
+  ASSERT_EQ(res->status, 201) << res->body;
+  const json job = json::parse(res->body);
+  EXPECT_EQ(job["name"], "survey");
+  EXPECT_EQ(job["input"]["images"], 3);
+  EXPECT_EQ(job["input"]["filename"], "3 photos");
+  EXPECT_EQ(job["input"]["width"], 64);
+  const std::string id = job["id"];
+  FollowToEnd(client, id);
+  const fs::path folder = dir_ / "data" / "jobs" / id / api::kImagesFolder;
+  {
+    std::lock_guard lock(ran_mutex_);
+    EXPECT_EQ(ran_input_, folder);  // the engine maps the folder, with the photo budget
+    EXPECT_EQ(ran_max_features_, kPhotoFolderMaxFeatures);
+  }
+  std::set<std::string> stored;
+  for (const fs::directory_entry& e : fs::directory_iterator(folder)) stored.insert(e.path().filename().string());
+  EXPECT_EQ(stored, (std::set<std::string>{"DJI_0001.png", "DJI_0002.png", "DJI_0003.png"}));
+  EXPECT_TRUE(glam::testing::ReadFile(folder / "DJI_0001.png") == PngPhoto(2));  // "../../DJI_0001.png"
+  EXPECT_FALSE(fs::exists(dir_ / "DJI_0001.png"));
+  EXPECT_FALSE(fs::exists(dir_ / "data" / "DJI_0001.png"));
+  // Restarting keeps the photos.
+  res = client.Post("/api/v1/jobs/" + id + "/restart");
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 200) << res->body;
+  FollowToEnd(client, id);
+  EXPECT_TRUE(fs::exists(folder / "DJI_0003.png"));
+
+  // Refused, and nothing left behind: not an image name, two photos under one name, a video
+  // as well, telemetry (photos carry EXIF GPS), photos that do not decode.
+  const std::size_t jobs_before = json::parse(client.Get("/api/v1/jobs")->body)["total"];
+  ExpectError(client.Post("/api/v1/jobs", httplib::MultipartFormDataItems{
+                                              {"images", PngPhoto(1), "a.png", "image/png"},
+                                              {"images", "text", "notes.txt", "text/plain"}}),
+              400, "bad_image", "not an image name");
+  ExpectError(client.Post("/api/v1/jobs", httplib::MultipartFormDataItems{
+                                              {"images", PngPhoto(1), "x/a.png", "image/png"},
+                                              {"images", PngPhoto(2), "y/a.png", "image/png"}}),
+              400, "bad_image", "duplicate names");
+  ExpectError(client.Post("/api/v1/jobs", httplib::MultipartFormDataItems{
+                                              {"images", PngPhoto(1), "a.png", "image/png"},
+                                              {"video", glam::testing::ReadFile(video_), "c.avi", "video/x-msvideo"}}),
+              400, "bad_upload", "video and images");
+  ExpectError(client.Post("/api/v1/jobs", httplib::MultipartFormDataItems{
+                                              {"images", PngPhoto(1), "a.png", "image/png"},
+                                              {"telemetry", "1\n00:00:00,000 --> 00:00:01,000\n[latitude: 46.5] "
+                                                            "[longitude: 7.5] [rel_alt: 5 abs_alt: 500]\n",
+                                               "a.SRT", "application/x-subrip"}}),
+              400, "bad_telemetry", "telemetry with photos");
+  ExpectError(client.Post("/api/v1/jobs", httplib::MultipartFormDataItems{
+                                              {"images", "not a JPEG at all", "a.jpg", "image/jpeg"}}),
+              422, "unsupported_images", "undecodable photos");
+  EXPECT_EQ(json::parse(client.Get("/api/v1/jobs")->body)["total"], jobs_before);
+  EXPECT_TRUE(fs::is_empty(dir_ / "data" / "uploads"));
 }
 
 TEST_F(HttpApiTest, RawBodyUploadTakesOptionsFromQuery) {

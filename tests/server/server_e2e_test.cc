@@ -9,12 +9,18 @@
 #include <fstream>
 #include <thread>
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <opencv2/videoio.hpp>
 
 // Eigen (via the evaluator) before httplib.h, whose <resolv.h> macros break Eigen.
 #include "tools/eval/evaluation.h"
 #include "tests/server/server_process.h"
 #include "tests/server/server_test_util.h"
+#include "engine/core/logging.h"
+#include "engine/export/tum_trajectory.h"
+#include "engine/pipeline/mapping_options.h"
+#include "tests/support/exif_photo.h"
 
 namespace glam::server {
 namespace {
@@ -113,6 +119,69 @@ TEST(ServerE2E, FullJobOverHttpMatchesGroundTruth) {
   ASSERT_TRUE(res);
   EXPECT_EQ(res->status, 206);
   EXPECT_EQ(res->body, "ply");
+
+  server.Signal(SIGTERM);
+  EXPECT_EQ(server.Wait(30), 0);
+}
+
+// A photo job: every 3rd frame of the clip as a JPEG tagged with its true position (EXIF GPS,
+// as a drone camera writes it), uploaded as "images" fields in shuffled order. The server maps
+// the folder in name order with the photo feature budget and georeferences it from the EXIF:
+// the camera centres come out in metres, east-north-up, where the photos were taken.
+TEST(ServerE2E, PhotoJobIsMappedAndGeoreferencedFromExif) {
+  const fs::path dir = glam::testing::FreshTempDir("e2e_photos");
+  const std::vector<TimedPose> truth = ReadTumTrajectory(kClip / "gt_trajectory.tum");
+  const EnuFrame frame({46.95, 7.45, 550.0});
+  cv::VideoCapture video((kClip / "video.mp4").string(), cv::CAP_FFMPEG);
+  ASSERT_TRUE(video.isOpened());
+  constexpr std::size_t kEvery = 3;
+  std::vector<std::size_t> frame_of_photo;
+  httplib::MultipartFormDataItems items;
+  cv::Mat image;
+  for (std::size_t i = 0; video.read(image); ++i) {
+    if (i % kEvery != 0) continue;
+    const Geodetic g = frame.GeodeticFromEnu(truth[i].world_from_cam.translation());
+    const std::string name = fmt::format("DJI_{:04}.JPG", frame_of_photo.size());
+    glam::testing::WritePhoto(dir / name, image, &g);
+    items.push_back({"images", glam::testing::ReadFile(dir / name), name, "image/jpeg"});
+    frame_of_photo.push_back(i);
+  }
+  std::reverse(items.begin(), items.end());  // the folder is mapped in name order anyway
+  items.push_back({"options", R"({"name": "photos"})", "", "application/json"});
+
+  ServerProcess server;
+  ASSERT_TRUE(server.Start(GLAM_BIN, dir / "data")) << server.error();
+  auto client = ClientFor(server);
+  auto res = client.Post("/api/v1/jobs", items);
+  ASSERT_TRUE(res);
+  ASSERT_EQ(res->status, 201) << res->body;
+  const std::string id = json::parse(res->body)["id"];
+  EXPECT_EQ(json::parse(res->body)["input"]["images"], frame_of_photo.size());
+  ASSERT_EQ(FollowToEnd(client, id), "completed") << GetJob(client, id).dump();
+
+  res = client.Get("/api/v1/jobs/" + id + "/report.json");
+  ASSERT_TRUE(res);
+  const json report = json::parse(res->body);
+  EXPECT_EQ(report["sift_max_features"], kPhotoFolderMaxFeatures);
+  ASSERT_EQ(report["georeference"]["ok"], true) << report["georeference"].dump();
+  EXPECT_EQ(report["georeference"]["gps_track"], "EXIF GPS of the photos");
+  res = client.Get("/api/v1/jobs/" + id + "/trajectory.tum");
+  ASSERT_TRUE(res);
+  std::ofstream(dir / "trajectory.tum") << res->body;
+  const std::vector<TimedPose> mapped = ReadTumTrajectory(dir / "trajectory.tum");
+  ASSERT_GT(mapped.size(), frame_of_photo.size() * 8 / 10);
+  // The ENU origin is the first photo's position (the first frame's true centre).
+  const Eigen::Vector3d shift = truth.front().world_from_cam.translation();
+  double sum = 0;
+  for (const TimedPose& p : mapped) {
+    const auto photo = static_cast<std::size_t>(std::llround(p.timestamp));  // photo folders: 1 fps
+    ASSERT_LT(photo, frame_of_photo.size());
+    sum += (p.world_from_cam.translation() + shift - truth[frame_of_photo[photo]].world_from_cam.translation()).squaredNorm();
+  }
+  const double rms = std::sqrt(sum / static_cast<double>(mapped.size()));
+  GLAM_LOG_INFO("photo job: {} of {} photos posed, {:.3f} m rms from the truth", mapped.size(), frame_of_photo.size(), rms);
+  // Exact GPS, so what is left is the map's own error (the clip flies ~100 m up).
+  EXPECT_LT(rms, 1.0);
 
   server.Signal(SIGTERM);
   EXPECT_EQ(server.Wait(30), 0);

@@ -23,6 +23,7 @@ import { tmpdir } from 'node:os';
 import { dirname, join, resolve } from 'node:path';
 import { createInterface } from 'node:readline';
 import { fileURLToPath } from 'node:url';
+import { deflateSync } from 'node:zlib';
 
 const here = dirname(fileURLToPath(import.meta.url));
 const TOKEN = 'browser-test-token';
@@ -50,6 +51,43 @@ function srtFromTruth(truthPath) {
     return `${i + 1}\n${stamp(t)} --> ${stamp(t + 0.03)}\n[latitude: ${lat.toFixed(8)}] [longitude: ${lon.toFixed(8)}] ` +
       `[rel_alt: ${z.toFixed(3)} abs_alt: ${(alt0 + z).toFixed(3)}]\n`;
   }).join('\n');
+}
+
+// A small RGB PNG of pseudo-random pixels (what the server's upload probe decodes).
+function tinyPng(width, height, seed) {
+  const crcTable = Array.from({ length: 256 }, (_, n) => {
+    let c = n;
+    for (let k = 0; k < 8; k += 1) c = c & 1 ? 0xedb88320 ^ (c >>> 1) : c >>> 1;
+    return c >>> 0;
+  });
+  const crc32 = (buf) => {
+    let c = 0xffffffff;
+    for (const b of buf) c = crcTable[(c ^ b) & 0xff] ^ (c >>> 8);
+    return (c ^ 0xffffffff) >>> 0;
+  };
+  const chunk = (type, data) => {
+    const body = Buffer.concat([Buffer.from(type, 'ascii'), data]);
+    const out = Buffer.alloc(12 + data.length);
+    out.writeUInt32BE(data.length, 0);
+    body.copy(out, 4);
+    out.writeUInt32BE(crc32(body), 8 + data.length);
+    return out;
+  };
+  const header = Buffer.alloc(13);
+  header.writeUInt32BE(width, 0);
+  header.writeUInt32BE(height, 4);
+  header[8] = 8;  // bit depth
+  header[9] = 2;  // RGB
+  const rows = Buffer.alloc(height * (1 + 3 * width));
+  let state = seed * 2654435761 >>> 0;
+  for (let y = 0; y < height; y += 1) {
+    for (let i = 1; i <= 3 * width; i += 1) {
+      state = (state * 1664525 + 1013904223) >>> 0;
+      rows[y * (1 + 3 * width) + i] = state >>> 24;
+    }
+  }
+  return Buffer.concat([Buffer.from([0x89, 0x50, 0x4e, 0x47, 0x0d, 0x0a, 0x1a, 0x0a]), chunk('IHDR', header),
+    chunk('IDAT', deflateSync(rows)), chunk('IEND', Buffer.alloc(0))]);
 }
 
 function args() {
@@ -217,6 +255,9 @@ async function main() {
     check(report.points === job.progress.points, `report.json points ${report.points} == progress.points ${job.progress.points}`);
     check(report.georeference && report.georeference.ok === true && report.georeference.frame === 'ENU',
       `the GPS track uploaded with the video georeferenced the map: ${JSON.stringify(report.georeference)}`);
+    check(Array.isArray(tileset.root.transform) && tileset.root.transform.length === 16 &&
+      Math.hypot(tileset.root.transform[12], tileset.root.transform[13], tileset.root.transform[14]) > 6.3e6,
+      'the georeferenced tileset has a root transform to earth-centred coordinates (the viewer ignores it)');
     check(viewer.revision === tileset.extras.revision, `viewer revision ${viewer.revision} == tileset revision ${tileset.extras.revision}`);
     const fetches = Object.values(viewer.tileFetches);
     check(fetches.length === children.length && fetches.every((n) => n === 1),
@@ -323,6 +364,24 @@ async function main() {
     const expectedParts = (job.parts || []).flatMap((p) => [p.urls.trajectory, p.urls.points]);
     check(shownParts.length === expectedParts.length && shownParts.every((path, i) => path === expectedParts[i]),
       `job table part links ${JSON.stringify(shownParts)} match the job JSON's parts ${JSON.stringify(expectedParts)}`);
+
+    // 6b. Photos through the same form: several images chosen at once become one photo job.
+    const photoFiles = [1, 2, 3].map((i) => ({
+      name: `DJI_000${i}.png`, mimeType: 'image/png', buffer: tinyPng(64, 48, i),
+    }));
+    await page.setInputFiles('#video-file', photoFiles);
+    check((await page.textContent('#drop-zone .file-name')) === '3 photos', 'the form shows the chosen photos');
+    await page.uncheck('#open-after-upload');
+    await page.click('#upload-form button[type=submit]');
+    const created = await page.waitForFunction(() => {
+      const m = document.querySelector('#upload-status').textContent.match(/Job ([0-9a-f]{16}) created/);
+      return m && m[1];
+    }, null, { timeout: 30_000 });
+    const photoJobId = await created.jsonValue();
+    check(!/[?&]job=/.test(page.url()), 'with "open the map view" unticked the page stays on the job list');
+    const photoJob = await api(base, `jobs/${photoJobId}`);
+    check(photoJob.input && photoJob.input.images === 3 && photoJob.input.filename === '3 photos',
+      `photos uploaded through the page became a photo job: ${JSON.stringify(photoJob.input)}`);
 
     // 7. A standard 3D Tiles client on the quantized tileset, from a page of the same origin.
     const clientPage = await browser.newPage();

@@ -93,10 +93,22 @@ export async function deleteJob(id) {
 // options object of docs/api.md ("Creating a job"); telemetry: the video's GPS track (a DJI
 // .SRT File) or null. onProgress(fraction in 0..1).
 export function uploadVideo(file, options, onProgress, telemetry = null) {
+  const form = new FormData();
+  form.append('video', file, file.name);
+  if (telemetry) form.append('telemetry', telemetry, telemetry.name);
+  return postJobForm(form, options, onProgress);
+}
+
+// A photo job: every file as an "images" field (the server maps them in name order and reads
+// their EXIF GPS).
+export function uploadPhotos(files, options, onProgress) {
+  const form = new FormData();
+  for (const file of files) form.append('images', file, file.name);
+  return postJobForm(form, options, onProgress);
+}
+
+function postJobForm(form, options, onProgress) {
   return new Promise((resolve, reject) => {
-    const form = new FormData();
-    form.append('video', file, file.name);
-    if (telemetry) form.append('telemetry', telemetry, telemetry.name);
     if (options && Object.keys(options).length > 0) form.append('options', JSON.stringify(options));
     const xhr = new XMLHttpRequest();
     xhr.open('POST', apiUrl('jobs'));

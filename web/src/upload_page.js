@@ -1,8 +1,19 @@
-// Upload form: a video chosen or dropped, optional name / focal length / intrinsics.json and
+// Upload form: a video (or a set of photos) chosen or dropped, optional name / focal length / intrinsics.json and
 // the advanced job options, sent with a progress bar. Options follow docs/api.md "Creating a job": `focal` (pixels at
 // the original resolution) or `intrinsics` (an intrinsics.json object); not both.
 
-import { uploadVideo } from './api.js';
+import { uploadPhotos, uploadVideo } from './api.js';
+
+const isImage = (f) => f.type.startsWith('image/') || /\.(jpe?g|png|tiff?|bmp|webp)$/i.test(f.name);
+
+// What the chosen files are: one video, or photos (all images); throws otherwise.
+function classify(files) {
+  if (files.length === 0) return null;
+  const images = files.filter(isImage);
+  if (images.length === files.length) return { photos: images };
+  if (files.length === 1) return { video: files[0] };
+  throw new Error('choose one video, or photos only');
+}
 
 function readIntrinsics(file) {
   return file.text().then((text) => {
@@ -58,10 +69,11 @@ export function setupUploadPage(root, onCreated) {
   const button = form.querySelector('button[type=submit]');
   let dropped = null;
 
-  const chosen = () => dropped || fileInput.files[0] || null;
+  const chosen = () => dropped || Array.from(fileInput.files);
   const showChosen = () => {
-    const f = chosen();
-    drop.querySelector('.file-name').textContent = f ? f.name : 'no video chosen';
+    const files = chosen();
+    drop.querySelector('.file-name').textContent =
+      files.length === 0 ? 'no video chosen' : files.length === 1 ? files[0].name : `${files.length} photos`;
   };
   fileInput.addEventListener('change', () => {
     dropped = null;
@@ -75,33 +87,45 @@ export function setupUploadPage(root, onCreated) {
   drop.addEventListener('drop', (e) => {
     e.preventDefault();
     drop.classList.remove('over');
-    if (e.dataTransfer.files.length > 0) dropped = e.dataTransfer.files[0];
+    if (e.dataTransfer.files.length > 0) dropped = Array.from(e.dataTransfer.files);
     showChosen();
   });
 
   form.addEventListener('submit', async (e) => {
     e.preventDefault();
-    const file = chosen();
-    if (!file) {
-      status.textContent = 'Choose or drop a video first.';
+    let input;
+    try {
+      input = classify(chosen());
+    } catch (err) {
+      status.textContent = `Upload failed: ${err.message}`;
       return;
     }
+    if (!input) {
+      status.textContent = 'Choose or drop a video (or photos) first.';
+      return;
+    }
+    const label = input.video ? input.video.name : `${input.photos.length} photos`;
     button.disabled = true;
     bar.hidden = false;
     bar.value = 0;
     try {
       const options = await collectOptions(form);
-      status.textContent = `Uploading ${file.name}…`;
-      const job = await uploadVideo(file, options, (fraction) => {
+      const telemetry = form.elements.telemetry.files[0] || null;
+      if (input.photos && telemetry) throw new Error('photos carry their GPS in EXIF; a GPS track goes with a video');
+      status.textContent = `Uploading ${label}…`;
+      const onProgress = (fraction) => {
         bar.value = fraction;
-        status.textContent = `Uploading ${file.name}: ${Math.round(fraction * 100)} %`;
-      }, form.elements.telemetry.files[0] || null);
+        status.textContent = `Uploading ${label}: ${Math.round(fraction * 100)} %`;
+      };
+      const job = input.video ? await uploadVideo(input.video, options, onProgress, telemetry)
+                              : await uploadPhotos(input.photos, options, onProgress);
       bar.value = 1;
       status.textContent = `Job ${job.id} created (${job.state}).`;
+      // Before the reset, which would tick "open the map view" again.
+      onCreated(job);
       form.reset();
       dropped = null;
       showChosen();
-      onCreated(job);
     } catch (err) {
       status.textContent = `Upload failed: ${err.message}`;
     } finally {
