@@ -333,8 +333,8 @@ void JobService::Delete(const std::string& id) {
 
 fs::path JobService::ResultFile(const std::string& id, const std::string& name) const {
   const Job job = Get(id);
-  static const std::set<std::string> kWholeMap = {"trajectory.tum", "points.ply", "report.json",
-                                                  "graph.json"};
+  static const std::set<std::string> kWholeMap = {"trajectory.tum", "trajectory.geojson", "points.ply",
+                                                  "report.json", "graph.json"};
   const fs::path dir = JobDir(id);
   const bool part = name.rfind("parts/", 0) == 0;
   if (kWholeMap.count(name) != 0 || part) {
@@ -346,7 +346,11 @@ fs::path JobService::ResultFile(const std::string& id, const std::string& name) 
     if (part) return PartFile(dir, id, name);
     const fs::path path = dir / name;
     if (!fs::is_regular_file(path)) {
-      throw ApiError(404, "not_found", fmt::format("job {} has no {}", id, name));
+      throw ApiError(404, "not_found",
+                     fmt::format("job {} has no {}{}", id, name,
+                                 name == "trajectory.geojson" ? " (written for georeferenced maps only: upload the "
+                                                                "video's GPS track, or photos with EXIF GPS)"
+                                                              : ""));
     }
     return path;
   }

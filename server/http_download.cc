@@ -24,6 +24,7 @@ std::string ContentTypeFor(const std::string& name) {
     const std::string s(suffix);
     return name.size() >= s.size() && name.compare(name.size() - s.size(), s.size(), s) == 0;
   };
+  if (ends_with(".geojson")) return "application/geo+json";
   if (ends_with(".json")) return "application/json";
   if (ends_with(".glb")) return "model/gltf-binary";
   if (ends_with(".tum")) return "text/plain; charset=utf-8";

@@ -23,6 +23,8 @@
 #include "engine/alignment/vocabulary_tree.h"
 #include "engine/pipeline/alignment_thread.h"
 #include "engine/geo/exif_gps.h"
+#include "engine/geo/geodetic.h"
+#include "engine/geo/geojson_track.h"
 #include "engine/geo/gps_track.h"
 #include "engine/pipeline/georeference_map.h"
 #include "engine/pipeline/map_export.h"
@@ -63,6 +65,25 @@ void WriteJson(const std::filesystem::path& path, const nlohmann::json& json) {
 
 // A fresh run owns out_dir's submaps/ and checkpoint: leftovers of an earlier run there would
 // otherwise be mixed into this one's map.
+// trajectory.geojson (engine/geo/geojson_track.h) of a georeferenced map: its camera centres
+// (as in trajectory.tum) in WGS84. Removed otherwise, so a map made again without GPS in the
+// same directory keeps no stale path.
+void WriteGeoJsonTrack(const MapSnapshot& snapshot, const std::filesystem::path& submaps_root,
+                       const std::filesystem::path& out_dir, const MappingReport& report) {
+  const std::filesystem::path file = out_dir / kGeoJsonTrackFile;
+  if (!report.georeference.ok) {
+    std::error_code ec;
+    std::filesystem::remove(file, ec);
+    return;
+  }
+  const EnuFrame enu(report.georeference.origin);
+  std::vector<GeoPathPoint> path;
+  for (const auto& [frame, centre] : WorldCameraCentres(snapshot, submaps_root)) {
+    path.push_back({frame, static_cast<double>(frame) / report.fps, enu.GeodeticFromEnu(centre)});
+  }
+  WriteFileAtomically(file, GeoJsonTrack(path, std::filesystem::path(report.input).filename().string()));
+}
+
 void ClearPreviousRun(const std::filesystem::path& out_dir) {
   std::error_code ec;
   for (const auto& entry : std::filesystem::directory_iterator(out_dir / "submaps", ec)) {
@@ -342,6 +363,7 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
     if (geo.snapshot) snapshot = std::move(geo.snapshot);
   }
   const MapExportCounts exported = ExportWorldMap(*snapshot, submaps_root, out_dir, report.fps);
+  WriteGeoJsonTrack(*snapshot, submaps_root, out_dir, report);
   tiles.OnRevision(*snapshot);
   tiles.WriteMapGlb(*snapshot, submaps_root);
   WriteJson(out_dir / "graph.json", aligner.GraphJson());

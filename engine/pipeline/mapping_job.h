@@ -5,7 +5,8 @@
 // every exit path and the decoder thread is always joined; the first exception of either side
 // is rethrown after joining, so a failure never leaves a thread behind or hangs the other side.
 //
-// Outputs in out_dir: submaps/<id>/, trajectory.tum, points.ply, report.json, graph.json.
+// Outputs in out_dir: submaps/<id>/, trajectory.tum, points.ply, report.json, graph.json,
+// and trajectory.geojson when the map is georeferenced.
 #pragma once
 
 #include <cstdint>

@@ -81,6 +81,18 @@ TEST(GeoreferenceEndToEnd, AVideoWithItsSrtIsMappedInMetresEastNorthUp) {
     ecef_sum += (ecef - truth_ecef).squaredNorm();
   }
   EXPECT_LT(std::sqrt(ecef_sum / static_cast<double>(mapped.size())), 0.6);
+  // trajectory.geojson: the same centres in WGS84, [longitude, latitude, altitude].
+  const nlohmann::json geojson = nlohmann::json::parse(std::ifstream(dir / "out" / "trajectory.geojson"));
+  const nlohmann::json& line = geojson["features"][0]["geometry"]["coordinates"];
+  ASSERT_EQ(line.size(), mapped.size());
+  double geo_sum = 0;
+  for (std::size_t i = 0; i < mapped.size(); ++i) {
+    const auto index = static_cast<std::size_t>(std::llround(mapped[i].timestamp * 30));
+    EXPECT_EQ(geojson["features"][0]["properties"]["frames"][i], index);
+    const Geodetic g{line[i][1].get<double>(), line[i][0].get<double>(), line[i][2].get<double>()};
+    geo_sum += (synth_frame.EnuFromGeodetic(g) - truth[index].world_from_cam.translation()).squaredNorm();
+  }
+  EXPECT_LT(std::sqrt(geo_sum / static_cast<double>(mapped.size())), 0.6);
   // Without the sidecar (or with --no-gps) the same video is not georeferenced.
   MappingOptions no_gps;
   no_gps.find_gps = false;
@@ -88,6 +100,7 @@ TEST(GeoreferenceEndToEnd, AVideoWithItsSrtIsMappedInMetresEastNorthUp) {
   EXPECT_TRUE(plain.gps_track.empty());
   EXPECT_FALSE(plain.georeference.ok);
   EXPECT_FALSE(nlohmann::json::parse(std::ifstream(dir / "plain" / "tileset.json"))["root"].contains("transform"));
+  EXPECT_FALSE(fs::exists(dir / "plain" / "trajectory.geojson"));
 }
 
 // RMS distance (m) of the mapped camera centres of frames [first, first + truth.size()) from

@@ -191,6 +191,18 @@ TEST_F(HttpApiTest, UploadFollowEventsAndDownload) {
   EXPECT_EQ(res->get_header_value("Content-Range"), "bytes 4-9/" + std::to_string(std::string(kTrajectory).size()));
   ExpectError(client.Get("/api/v1/jobs/" + id + "/trajectory.tum", {{"Range", "bytes=9999-"}}), 416, "", "range");
   ExpectError(client.Get("/api/v1/jobs/" + id + "/points.ply"), 404, "not_found", "missing result");
+  // trajectory.geojson: only a georeferenced map has one (the 404 says so); served as GeoJSON.
+  res = client.Get("/api/v1/jobs/" + id + "/trajectory.geojson");
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 404);
+  EXPECT_NE(res->body.find("georeferenced maps only"), std::string::npos) << res->body;
+  const std::string geojson = R"({"type":"FeatureCollection","features":[]})";
+  std::ofstream(dir_ / "data" / "jobs" / id / "trajectory.geojson") << geojson;
+  res = client.Get("/api/v1/jobs/" + id + "/trajectory.geojson");
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 200);
+  EXPECT_EQ(res->body, geojson);
+  EXPECT_EQ(res->get_header_value("Content-Type"), "application/geo+json");
   ExpectError(client.Get("/api/v1/jobs/" + id + "/tileset.json"), 404, "not_available", "tiles");
   ExpectError(client.Get("/api/v1/jobs/" + id + "/tiles/0.glb"), 404, "not_available", "tile");
 
