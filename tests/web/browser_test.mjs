@@ -255,6 +255,15 @@ async function main() {
     check(report.points === job.progress.points, `report.json points ${report.points} == progress.points ${job.progress.points}`);
     check(report.georeference && report.georeference.ok === true && report.georeference.frame === 'ENU',
       `the GPS track uploaded with the video georeferenced the map: ${JSON.stringify(report.georeference)}`);
+    const shownLocation = await page.textContent('#map-location').catch(() => null);
+    check(viewer.location && Math.abs(viewer.location.latitude - report.georeference.origin.latitude) < 1e-9 &&
+      Math.abs(viewer.location.longitude - report.georeference.origin.longitude) < 1e-9 && shownLocation !== null,
+      `the stats panel shows where the map is: ${shownLocation}`);
+    const geojson = await (await fetch(`${base}${new URL(viewer.location.geojsonUrl, base).pathname}${new URL(viewer.location.geojsonUrl, base).search}`)).json();
+    const path = geojson.features[0].geometry.coordinates;
+    check(geojson.type === 'FeatureCollection' && path.length === report.frames_posed &&
+      Math.abs(path[0][1] - report.georeference.origin.latitude) < 1e-4 && Math.abs(path[0][0] - report.georeference.origin.longitude) < 1e-4,
+      `the panel's GeoJSON path link serves ${path.length} positions (frames posed ${report.frames_posed}) starting at the origin`);
     check(Array.isArray(tileset.root.transform) && tileset.root.transform.length === 16 &&
       Math.hypot(tileset.root.transform[12], tileset.root.transform[13], tileset.root.transform[14]) > 6.3e6,
       'the georeferenced tileset has a root transform to earth-centred coordinates (the viewer ignores it)');

@@ -2,7 +2,7 @@
 // map revision, with a stats panel and display controls. While the job runs it follows the
 // job's event stream; `window.glamViewer` exposes the view's state for the browser test.
 
-import { getJob } from './api.js';
+import { apiUrl, getJob, getJson, withToken } from './api.js';
 import { createScene } from './scene.js';
 import { createMapTiles } from './map_tiles.js';
 import { preloadTileDecoder } from './tile_loader.js';
@@ -59,8 +59,24 @@ export async function openMapView(root, jobId) {
     });
   }
 
+  // A completed, georeferenced map: where it is (report.json georeference), shown in the panel.
+  async function showLocation() {
+    let report;
+    try {
+      report = await getJson(`jobs/${encodeURIComponent(jobId)}/report.json`);
+    } catch (err) {
+      return;  // no report (yet): nothing to show
+    }
+    const g = report.georeference;
+    if (!g || !g.ok || !g.origin) return;
+    viewer.location = { latitude: g.origin.latitude, longitude: g.origin.longitude, rmsM: g.rms_m,
+      geojsonUrl: withToken(apiUrl(`jobs/${encodeURIComponent(jobId)}/trajectory.geojson`)) };
+    stats.set({ location: viewer.location });
+  }
+
   async function finish(state) {
     viewer.state = state;
+    if (state === 'completed') await showLocation();
     await tiles.settle();
     if (!scene.userMoved() || !autoFitDone) scene.fit();
     // The flag and title tell scripts (and the browser test) that nothing more will arrive.

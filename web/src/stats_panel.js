@@ -1,6 +1,18 @@
-// The map view's stats panel: points, submaps, revision, processing fps, job state.
+// The map view's stats panel: points, submaps, revision, processing fps, job state and, for a
+// georeferenced map, where it is on the earth (with links to a web map and the GeoJSON path).
 
-import { formatCount, formatDuration } from './format.js';
+import { escapeHtml, formatCount, formatDuration } from './format.js';
+
+// values.location: { latitude, longitude, rmsM, geojsonUrl } of a georeferenced map.
+function locationCell(location) {
+  if (!location) return '–';
+  const { latitude: lat, longitude: lon } = location;
+  const text = `${Math.abs(lat).toFixed(5)}° ${lat >= 0 ? 'N' : 'S'}, ${Math.abs(lon).toFixed(5)}° ${lon >= 0 ? 'E' : 'W'}`;
+  const osm = `https://www.openstreetmap.org/?mlat=${lat.toFixed(6)}&mlon=${lon.toFixed(6)}#map=17/${lat.toFixed(6)}/${lon.toFixed(6)}`;
+  return `<span id="map-location" title="GPS fit rms ${location.rmsM.toFixed(2)} m">${text}</span> ` +
+    `<a href="${escapeHtml(osm)}" target="_blank" rel="noopener">map</a> ` +
+    `<a href="${escapeHtml(location.geojsonUrl)}" download="trajectory.geojson">path</a>`;
+}
 
 export function createStatsPanel(element) {
   const values = {};
@@ -17,6 +29,7 @@ export function createStatsPanel(element) {
       ['points', formatCount(values.pointsLoaded)],
       ['render', values.renderFps ? `${values.renderFps.toFixed(0)} fps` : '–'],
     ];
+    if (values.location) rows.push(['location', locationCell(values.location)]);
     element.innerHTML = rows.map(([k, v]) => `<div><span>${k}</span><b>${v}</b></div>`).join('');
   }
   return { set };
