@@ -17,6 +17,7 @@
 #include "engine/pipeline/mapping_job.h"
 #include "tests/support/exif_photo.h"
 #include "tests/support/temp_dir.h"
+#include "tests/support/unaligned_error.h"
 #include "tools/synth/gps_srt_writer.h"
 
 namespace glam {
@@ -103,21 +104,6 @@ TEST(GeoreferenceEndToEnd, AVideoWithItsSrtIsMappedInMetresEastNorthUp) {
   EXPECT_FALSE(fs::exists(dir / "plain" / "trajectory.geojson"));
 }
 
-// RMS distance (m) of the mapped camera centres of frames [first, first + truth.size()) from
-// truth + shift (the mapped frame index minus `first` indexes the truth).
-double RmsAgainstTruth(const std::vector<TimedPose>& mapped, std::size_t first, const std::vector<TimedPose>& truth,
-                       const Eigen::Vector3d& shift, std::size_t* count) {
-  double sum = 0;
-  *count = 0;
-  for (const TimedPose& p : mapped) {
-    const auto index = static_cast<std::size_t>(std::llround(p.timestamp * 30));
-    if (index < first || index >= first + truth.size()) continue;
-    sum += (p.world_from_cam.translation() + shift - truth[index - first].world_from_cam.translation()).squaredNorm();
-    ++*count;
-  }
-  return *count > 0 ? std::sqrt(sum / static_cast<double>(*count)) : 1e9;
-}
-
 // A flight in two pieces: two flights over different ground joined by a hard cut, so no frame
 // after the cut sees anything before it and the images cannot link the pieces (without GPS the
 // second is written to parts/1 in its own frame), with one GPS track over both. Each piece is
@@ -158,10 +144,17 @@ TEST(GeoreferenceEndToEnd, APieceTheImagesCannotLinkIsPlacedInTheMapByGps) {
   // fix, the first true position).
   const std::vector<TimedPose> mapped = ReadTumTrajectory(dir / "out" / "trajectory.tum");
   const Eigen::Vector3d shift = truth_a.front().world_from_cam.translation();
+  const std::size_t cut = truth_a.size();
+  const auto piece = [cut](bool second) {
+    return [cut, second](double t) -> std::optional<std::size_t> {
+      const auto index = static_cast<std::size_t>(std::llround(t * 30));
+      if ((index >= cut) != second) return std::nullopt;
+      return index;
+    };
+  };
   std::size_t count_a = 0, count_b = 0;
-  const double rms_a = RmsAgainstTruth(mapped, 0, truth_a, shift, &count_a);
-  std::vector<TimedPose> shifted_b(truth.begin() + static_cast<std::ptrdiff_t>(truth_a.size()), truth.end());
-  const double rms_b = RmsAgainstTruth(mapped, truth_a.size(), shifted_b, shift, &count_b);
+  const double rms_a = glam::testing::UnalignedCentreRms(mapped, truth, shift, piece(false), &count_a);
+  const double rms_b = glam::testing::UnalignedCentreRms(mapped, truth, shift, piece(true), &count_b);
   std::cout << fmt::format("two pieces: first {:.3f} m rms over {} frames, second (placed by GPS) {:.3f} m over {} "
                            "frames; fits {:.2f} / {:.2f} m\n",
                            rms_a, count_a, rms_b, count_b, report.georeference.rms_m, part.fit.rms_m);
@@ -223,13 +216,10 @@ TEST(GeoreferenceEndToEnd, APhotoFolderWithExifGpsIsMappedInMetresEastNorthUp) {
   const Eigen::Vector3d shift = truth.front().world_from_cam.translation();
   const std::vector<TimedPose> mapped = ReadTumTrajectory(dir / "out" / "trajectory.tum");
   ASSERT_GT(mapped.size(), frame_of_photo.size() * 8 / 10);
-  double sum = 0;
-  for (const TimedPose& p : mapped) {
-    const auto photo = static_cast<std::size_t>(std::llround(p.timestamp));  // photo folders: 1 fps
-    ASSERT_LT(photo, frame_of_photo.size());
-    sum += (p.world_from_cam.translation() + shift - truth[frame_of_photo[photo]].world_from_cam.translation()).squaredNorm();
-  }
-  const double rms = std::sqrt(sum / static_cast<double>(mapped.size()));
+  std::size_t compared = 0;
+  const double rms = glam::testing::UnalignedCentreRms(mapped, truth, shift, glam::testing::PhotoFrames(frame_of_photo),
+                                                       &compared);
+  EXPECT_EQ(compared, mapped.size());
   std::cout << fmt::format("photo folder georeferenced: rms {:.3f} m over {} photos (fit rms {:.2f} m)\n", rms,
                            mapped.size(), report.georeference.rms_m);
   EXPECT_LT(rms, 0.8);

@@ -21,6 +21,7 @@
 #include "engine/export/tum_trajectory.h"
 #include "engine/pipeline/mapping_options.h"
 #include "tests/support/exif_photo.h"
+#include "tests/support/unaligned_error.h"
 
 namespace glam::server {
 namespace {
@@ -172,13 +173,10 @@ TEST(ServerE2E, PhotoJobIsMappedAndGeoreferencedFromExif) {
   ASSERT_GT(mapped.size(), frame_of_photo.size() * 8 / 10);
   // The ENU origin is the first photo's position (the first frame's true centre).
   const Eigen::Vector3d shift = truth.front().world_from_cam.translation();
-  double sum = 0;
-  for (const TimedPose& p : mapped) {
-    const auto photo = static_cast<std::size_t>(std::llround(p.timestamp));  // photo folders: 1 fps
-    ASSERT_LT(photo, frame_of_photo.size());
-    sum += (p.world_from_cam.translation() + shift - truth[frame_of_photo[photo]].world_from_cam.translation()).squaredNorm();
-  }
-  const double rms = std::sqrt(sum / static_cast<double>(mapped.size()));
+  std::size_t compared = 0;
+  const double rms = glam::testing::UnalignedCentreRms(mapped, truth, shift, glam::testing::PhotoFrames(frame_of_photo),
+                                                       &compared);
+  EXPECT_EQ(compared, mapped.size());
   GLAM_LOG_INFO("photo job: {} of {} photos posed, {:.3f} m rms from the truth", mapped.size(), frame_of_photo.size(), rms);
   // Exact GPS, so what is left is the map's own error (the clip flies ~100 m up).
   EXPECT_LT(rms, 1.0);
