@@ -299,6 +299,7 @@ void HandleCreateJob(Context& ctx, const httplib::Request& req, httplib::Respons
     bool options_too_long = false;
     bool telemetry_too_long = false;
     std::string photo_error;  // why a photo part was refused
+    std::string photo_storage_error;  // a photo could not be stored (server side)
     bool video_and_photos = false;
     read_ok = reader(
         [&](const httplib::MultipartFormData& part) {
@@ -323,8 +324,15 @@ void HandleCreateJob(Context& ctx, const httplib::Request& req, httplib::Respons
               photo_error = fmt::format("two images are named \"{}\"", name);
               return false;
             }
-            if (!photos) photos.emplace(ctx.service.NewUploadPath());
-            photo = std::make_unique<TempUpload>(photos->path() / name);
+            // No exception may cross httplib's reader: a storage error ends the read and is
+            // thrown after it.
+            try {
+              if (!photos) photos.emplace(ctx.service.NewUploadPath());
+              photo = std::make_unique<TempUpload>(photos->path() / name);
+            } catch (const EnvironmentError& e) {
+              photo_storage_error = e.what();
+              return false;
+            }
             return true;
           }
           if (field == "video") {
@@ -363,6 +371,10 @@ void HandleCreateJob(Context& ctx, const httplib::Request& req, httplib::Respons
           return true;  // other fields are ignored
         });
     if (read_ok) close_photo();
+    if (!photo_storage_error.empty()) {
+      res.set_header("Connection", "close");
+      throw EnvironmentError(photo_storage_error);
+    }
     if (options_too_long) throw ApiError(400, "bad_options", "the options field is larger than 64 KiB");
     if (video_and_photos) {
       res.set_header("Connection", "close");

@@ -1,6 +1,7 @@
-// Upload form: a video (or a set of photos) chosen or dropped, optional name / focal length / intrinsics.json and
-// the advanced job options, sent with a progress bar. Options follow docs/api.md "Creating a job": `focal` (pixels at
-// the original resolution) or `intrinsics` (an intrinsics.json object); not both.
+// Upload form: a video (or a set of photos) chosen or dropped, optional name / focal length /
+// intrinsics.json and the advanced job options, sent with a progress bar. Options follow
+// docs/api.md "Creating a job": `focal` (pixels at the original resolution) or `intrinsics` (an
+// intrinsics.json object); not both.
 
 import { uploadPhotos, uploadVideo } from './api.js';
 
@@ -104,7 +105,8 @@ export function setupUploadPage(root, onCreated) {
       status.textContent = 'Choose or drop a video (or photos) first.';
       return;
     }
-    const label = input.video ? input.video.name : `${input.photos.length} photos`;
+    const label = input.video ? input.video.name
+      : input.photos.length === 1 ? input.photos[0].name : `${input.photos.length} photos`;
     button.disabled = true;
     bar.hidden = false;
     bar.value = 0;
