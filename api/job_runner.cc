@@ -24,8 +24,11 @@ void JobRunner::Enqueue(const std::string& job_id) {
   {
     std::lock_guard lock(mutex_);
     if (stopping_) return;
-    if (running_.count(job_id) != 0) return;
     if (std::find(queue_.begin(), queue_.end(), job_id) != queue_.end()) return;
+    if (running_.count(job_id) != 0) {
+      rerun_.insert(job_id);
+      return;
+    }
     queue_.push_back(job_id);
   }
   changed_.notify_all();
@@ -40,6 +43,7 @@ bool JobRunner::RemoveQueued(const std::string& job_id) {
       queue_.erase(it);
       removed = true;
     }
+    if (rerun_.erase(job_id) != 0) removed = true;
   }
   if (removed) changed_.notify_all();
   return removed;
@@ -61,7 +65,7 @@ bool JobRunner::IsRunning(const std::string& job_id) const {
 bool JobRunner::WaitUntilIdle(const std::string& job_id, std::chrono::milliseconds timeout) const {
   std::unique_lock lock(mutex_);
   return changed_.wait_for(lock, timeout, [&] {
-    return running_.count(job_id) == 0 &&
+    return running_.count(job_id) == 0 && rerun_.count(job_id) == 0 &&
            std::find(queue_.begin(), queue_.end(), job_id) == queue_.end();
   });
 }
@@ -117,6 +121,7 @@ void JobRunner::WorkerLoop() {
     {
       std::lock_guard lock(mutex_);
       running_.erase(job_id);
+      if (rerun_.erase(job_id) != 0 && !stopping_) queue_.push_back(job_id);
     }
     changed_.notify_all();
   }

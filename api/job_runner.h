@@ -9,6 +9,7 @@
 #include <deque>
 #include <functional>
 #include <map>
+#include <set>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -28,9 +29,13 @@ class JobRunner {
   JobRunner(const JobRunner&) = delete;
   JobRunner& operator=(const JobRunner&) = delete;
 
-  // Ignored after Shutdown() or if the id is already queued or running.
+  // Ignored after Shutdown() or if the id is already queued. A job still running (its work
+  // has not returned yet, although the job may already look finished to clients: a restart
+  // right after completion) is queued again as soon as its run returns, so the request is not
+  // lost.
   void Enqueue(const std::string& job_id);
-  // Removes a job that has not started yet; false if it is not in the queue.
+  // Removes a job that has not started yet (or a pending run after the current one); false if
+  // it is not in the queue.
   bool RemoveQueued(const std::string& job_id);
   // Cancels the token of a running job; false if it is not running.
   bool CancelRunning(const std::string& job_id);
@@ -54,6 +59,7 @@ class JobRunner {
   mutable std::condition_variable changed_;
   std::deque<std::string> queue_;
   std::map<std::string, CancellationToken> running_;
+  std::set<std::string> rerun_;  // enqueued while running: queued again when that run returns
   bool stopping_ = false;
   std::vector<std::thread> workers_;
 };

@@ -59,7 +59,7 @@ TEST(JobRunner, RemoveQueuedAndCancelRunning) {
   JobRunner runner(1, [&](const std::string& id, const CancellationToken& c) { rec.Run(id, c, 10s); });
   runner.Enqueue("first");
   runner.Enqueue("second");
-  runner.Enqueue("first");  // duplicate: ignored
+  runner.Enqueue("second");  // already queued: ignored
   const auto deadline = std::chrono::steady_clock::now() + 5s;
   while (!runner.IsRunning("first") && std::chrono::steady_clock::now() < deadline) std::this_thread::sleep_for(1ms);
   ASSERT_TRUE(runner.IsRunning("first"));
@@ -72,6 +72,29 @@ TEST(JobRunner, RemoveQueuedAndCancelRunning) {
   ASSERT_EQ(rec.cancelled.size(), 1u);
   EXPECT_EQ(rec.cancelled[0], "first");
   EXPECT_EQ(rec.started.size(), 1u);  // "second" never started
+}
+
+// A restart that arrives while the job's previous run is still returning (the job already
+// looks completed to clients) must not be lost: the job runs again once that run returns.
+TEST(JobRunner, EnqueuedWhileRunningRunsAgainAfterwards) {
+  Recorder rec;
+  JobRunner runner(1, [&](const std::string& id, const CancellationToken& c) { rec.Run(id, c, 100ms); });
+  runner.Enqueue("a");
+  const auto deadline = std::chrono::steady_clock::now() + 5s;
+  while (!runner.IsRunning("a") && std::chrono::steady_clock::now() < deadline) std::this_thread::sleep_for(1ms);
+  ASSERT_TRUE(runner.IsRunning("a"));
+  runner.Enqueue("a");
+  runner.Enqueue("a");  // one pending run, not two
+  EXPECT_TRUE(runner.WaitUntilIdle("a", 5s));
+  EXPECT_EQ(rec.started, (std::vector<std::string>{"a", "a"}));
+  // A pending run can be withdrawn like a queued one.
+  runner.Enqueue("b");
+  while (!runner.IsRunning("b") && std::chrono::steady_clock::now() < deadline) std::this_thread::sleep_for(1ms);
+  ASSERT_TRUE(runner.IsRunning("b"));
+  runner.Enqueue("b");
+  EXPECT_TRUE(runner.RemoveQueued("b"));
+  EXPECT_TRUE(runner.WaitUntilIdle("b", 5s));
+  EXPECT_EQ(rec.started.size(), 3u);
 }
 
 TEST(JobRunner, ShutdownCancelsRunningAndLeavesQueued) {
