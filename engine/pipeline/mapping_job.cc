@@ -63,8 +63,6 @@ void WriteJson(const std::filesystem::path& path, const nlohmann::json& json) {
   WriteFileAtomically(path, json.dump(2) + "\n");
 }
 
-// A fresh run owns out_dir's submaps/ and checkpoint: leftovers of an earlier run there would
-// otherwise be mixed into this one's map.
 // trajectory.geojson (engine/geo/geojson_track.h) of a georeferenced map: its camera centres
 // (as in trajectory.tum) in WGS84. Removed otherwise, so a map made again without GPS in the
 // same directory keeps no stale path.
@@ -84,6 +82,8 @@ void WriteGeoJsonTrack(const MapSnapshot& snapshot, const std::filesystem::path&
   WriteFileAtomically(file, GeoJsonTrack(path, std::filesystem::path(report.input).filename().string()));
 }
 
+// A fresh run owns out_dir's submaps/ and checkpoint: leftovers of an earlier run there would
+// otherwise be mixed into this one's map.
 void ClearPreviousRun(const std::filesystem::path& out_dir) {
   std::error_code ec;
   for (const auto& entry : std::filesystem::directory_iterator(out_dir / "submaps", ec)) {
