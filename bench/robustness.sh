@@ -13,6 +13,8 @@
 # map's median error (`glam eval`).
 #
 # Usage: bench/robustness.sh [BUILD_DIR]   (default build; outputs in out/bench/robustness)
+# Variants: GLAM_MAP_ARGS="--klt-predicted-levels -1" adds options to every `glam map`, and
+# RUN_TAG=name keeps that variant's outputs apart (out/bench/robustness/CLIP/uncalibrated-name).
 # Takes ~5 minutes on 2 cores (~10 with CALIBRATED=1).
 set -euo pipefail
 BUILD_DIR="${1:-build}"
@@ -53,8 +55,8 @@ declare -A DERIVED=(
 )
 DERIVED_ORDER="osd flicker defocus motion_blur freeze"
 
-printf "| clip | synth arguments (or derivation) | run | focal (truth) | held | k1 (truth) | submaps | posed | ATE | map median |\n"
-printf "|---|---|---|---|---|---|---|---|---|---|\n"
+printf "| clip | synth arguments (or derivation) | run | focal (truth) | held | k1 (truth) | submaps | posed | ATE | map median | wall time |\n"
+printf "|---|---|---|---|---|---|---|---|---|---|---|\n"
 # derive NAME: WORK/NAME/gt from WORK/lawnmower/gt through DERIVED[NAME] (skipped when done).
 derive() {
   local name=$1 src="$WORK/lawnmower/gt" dst="$WORK/$1/gt"
@@ -101,14 +103,18 @@ for name in $ORDER $DERIVED_ORDER; do
   for run in $runs; do
     args=()
     [ "$run" = calibrated ] && args=(--intrinsics "$WORK/$name/gt/intrinsics.json")
-    out="$WORK/$name/$run"
+    # shellcheck disable=SC2206  # the variant's options are words
+    args+=(${GLAM_MAP_ARGS:-})
+    out="$WORK/$name/$run${RUN_TAG:+-$RUN_TAG}"
+    start=$(date +%s.%N)
     "$GLAM" --log-level warn map "$WORK/$name/gt/video.mp4" "${args[@]}" --out "$out" > "$out.log" 2>&1 \
       || { tail -5 "$out.log"; exit 1; }
+    seconds=$(echo "$(date +%s.%N) - $start" | bc)
     "$GLAM" --log-level warn eval --gt "$WORK/$name/gt" --result "$out" --json "$out/eval.json" > /dev/null
     how="${CLIP[$name]:-${DERIVED[$name]:-}}"
-    python3 - "$out" "$WORK/$name/gt" "$name" "$run" "$how" <<'PY'
+    python3 - "$out" "$WORK/$name/gt" "$name" "$run" "$how" "$seconds" <<'PY'
 import json, sys
-out, gt, name, run, synth = sys.argv[1:6]
+out, gt, name, run, synth, seconds = sys.argv[1:7]
 intrinsics = json.load(open(f"{gt}/intrinsics.json"))
 truth = intrinsics["fx"]
 r = json.load(open(f"{out}/report.json"))
@@ -119,7 +125,7 @@ median = f"{m['median_m']:.2f} m" if "median_m" in m else "-"
 print(f"| {name} | `{synth}` | {run} | {f:.0f} ({truth:.0f}, {100 * (f / truth - 1):+.1f} %) | "
       f"{'yes' if r.get('focal_held') else 'no'} | "
       f"{r.get('k1', 0):+.3f}{' held' if r.get('k1_held') else ''} ({intrinsics.get('k1', 0):+.2f}) | {r['submaps']} | "
-      f"{100 * e['trajectory']['fraction_posed']:.0f} % | {e['trajectory']['ate_rmse_m']:.3f} m | {median} |")
+      f"{100 * e['trajectory']['fraction_posed']:.0f} % | {e['trajectory']['ate_rmse_m']:.3f} m | {median} | {float(seconds):.1f} s |")
 PY
   done
 done

@@ -75,6 +75,7 @@ void BundleAdjustmentOptions::Check() const {
   CheckGreaterEqual("BundleAdjustmentOptions.k1_prior_weight", k1_prior_weight, 0.0);
   CheckGreaterEqual("BundleAdjustmentOptions.fixed_keyframes", fixed_keyframes, 1);
   CheckGreater("BundleAdjustmentOptions.num_threads", num_threads, 0);
+  CheckGreaterEqual("BundleAdjustmentOptions.dense_schur_max_keyframes", dense_schur_max_keyframes, 0);
 }
 
 double ReprojectionError(const Intrinsics& intrinsics, const Keyframe& keyframe,
@@ -177,7 +178,9 @@ BundleAdjustmentSummary BundleAdjust(const Intrinsics& intrinsics, std::vector<K
   }
 
   ceres::Solver::Options solver_options;
-  solver_options.linear_solver_type = ceres::SPARSE_SCHUR;
+  solver_options.linear_solver_type =
+      keyframes.size() <= static_cast<std::size_t>(options.dense_schur_max_keyframes) ? ceres::DENSE_SCHUR
+                                                                                     : ceres::SPARSE_SCHUR;
   solver_options.max_num_iterations = options.max_iterations;
   solver_options.num_threads = options.num_threads;
   solver_options.logging_type = ceres::SILENT;

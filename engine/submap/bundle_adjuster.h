@@ -51,6 +51,12 @@ struct BundleAdjustmentOptions {
   int fixed_keyframes = 1;
   bool fix_scale = true;
   int num_threads = 1;
+  // Ceres' linear solver: DENSE_SCHUR up to this many keyframes, SPARSE_SCHUR above. Both
+  // eliminate the points and solve the same reduced camera system exactly; for the ~2-30
+  // keyframes of a submap a dense Cholesky of it is cheaper than a sparse one (Ceres' own
+  // advice for problems of a few cameras); the completion adjustment with every tracked frame
+  // (hundreds of cameras) stays sparse. 0 = always sparse.
+  int dense_schur_max_keyframes = 40;
 
   void Check() const;
 };

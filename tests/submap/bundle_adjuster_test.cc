@@ -85,6 +85,37 @@ TEST(BundleAdjuster, RestoresPerturbedSceneUpToGauge) {
   EXPECT_LT(aligned.rmse, 0.1);  // metres, at 100 m altitude
 }
 
+TEST(BundleAdjuster, DenseAndSparseSchurReachTheSameSolution) {
+  // The solver is chosen by keyframe count for speed only: both must give the same answer.
+  const Scene truth = MakeScene(500, 0.3, 5);
+  Scene start = truth;
+  std::mt19937 rng(6);
+  std::normal_distribution<double> n(0, 1);
+  for (std::size_t k = 1; k < start.keyframes.size(); ++k) {
+    Vector6d d;
+    d << 0.3 * n(rng), 0.3 * n(rng), 0.3 * n(rng), 0.003 * n(rng), 0.003 * n(rng), 0.003 * n(rng);
+    start.keyframes[k].cam_from_submap = SE3::Exp(d) * start.keyframes[k].cam_from_submap;
+    start.keyframes[k].focal = 530;
+  }
+  for (Landmark& lm : start.landmarks) lm.point_in_submap += Eigen::Vector3d(n(rng), n(rng), n(rng)) * 0.3;
+  Scene dense = start, sparse = start;
+  BundleAdjustmentOptions options;
+  options.max_iterations = 50;
+  options.dense_schur_max_keyframes = 100;
+  const auto dense_summary = BundleAdjust(dense.intrinsics, dense.keyframes, dense.landmarks, options);
+  options.dense_schur_max_keyframes = 0;
+  const auto sparse_summary = BundleAdjust(sparse.intrinsics, sparse.keyframes, sparse.landmarks, options);
+  EXPECT_LT(dense_summary.final_rms_pixels, 0.45);
+  EXPECT_NEAR(dense_summary.final_rms_pixels, sparse_summary.final_rms_pixels, 1e-6);
+  EXPECT_NEAR(dense.keyframes[3].focal, sparse.keyframes[3].focal, 1e-3);
+  EXPECT_NEAR(dense_summary.k1, sparse_summary.k1, 1e-6);
+  for (std::size_t k = 0; k < dense.keyframes.size(); ++k) {
+    const Eigen::Vector3d d = dense.keyframes[k].cam_from_submap.Inverse().translation() -
+                              sparse.keyframes[k].cam_from_submap.Inverse().translation();
+    EXPECT_LT(d.norm(), 1e-4) << "keyframe " << k;  // metres, at 100 m altitude
+  }
+}
+
 TEST(BundleAdjuster, EstimatesFocalFromTenPercentWrongStart) {
   const double true_focal = 520;
   const Scene truth = MakeScene(true_focal, 0.2, 3);
@@ -186,6 +217,9 @@ TEST(BundleAdjuster, RejectsBadOptions) {
   EXPECT_THROW(BundleAdjust(s.intrinsics, s.keyframes, s.landmarks, options), InputError);
   options = {};
   options.k1_prior_weight = -1;
+  EXPECT_THROW(BundleAdjust(s.intrinsics, s.keyframes, s.landmarks, options), InputError);
+  options = {};
+  options.dense_schur_max_keyframes = -1;
   EXPECT_THROW(BundleAdjust(s.intrinsics, s.keyframes, s.landmarks, options), InputError);
 }
 
