@@ -60,17 +60,23 @@ std::vector<Eigen::Vector3d> Centres(const std::vector<Keyframe>& kfs) {
   return c;
 }
 
+// Moves every keyframe but the first (the gauge) and every landmark at random: translations
+// and points by ~`metres` per axis, rotations by ~`radians` per axis.
+void Perturb(Scene* s, std::uint32_t seed, double metres, double radians) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> n(0, 1);
+  for (std::size_t k = 1; k < s->keyframes.size(); ++k) {
+    Vector6d d;
+    d << metres * n(rng), metres * n(rng), metres * n(rng), radians * n(rng), radians * n(rng), radians * n(rng);
+    s->keyframes[k].cam_from_submap = SE3::Exp(d) * s->keyframes[k].cam_from_submap;
+  }
+  for (Landmark& lm : s->landmarks) lm.point_in_submap += Eigen::Vector3d(n(rng), n(rng), n(rng)) * metres;
+}
+
 TEST(BundleAdjuster, RestoresPerturbedSceneUpToGauge) {
   const Scene truth = MakeScene(500, 0.3, 1);
   Scene est = truth;
-  std::mt19937 rng(2);
-  std::normal_distribution<double> n(0, 1);
-  for (std::size_t k = 1; k < est.keyframes.size(); ++k) {
-    Vector6d d;
-    d << 0.5 * n(rng), 0.5 * n(rng), 0.5 * n(rng), 0.005 * n(rng), 0.005 * n(rng), 0.005 * n(rng);
-    est.keyframes[k].cam_from_submap = SE3::Exp(d) * est.keyframes[k].cam_from_submap;
-  }
-  for (Landmark& lm : est.landmarks) lm.point_in_submap += Eigen::Vector3d(n(rng), n(rng), n(rng)) * 0.5;
+  Perturb(&est, 2, 0.5, 0.005);
 
   BundleAdjustmentOptions options;
   options.refine_focal = false;
@@ -89,15 +95,8 @@ TEST(BundleAdjuster, DenseAndSparseSchurReachTheSameSolution) {
   // The solver is chosen by keyframe count for speed only: both must give the same answer.
   const Scene truth = MakeScene(500, 0.3, 5);
   Scene start = truth;
-  std::mt19937 rng(6);
-  std::normal_distribution<double> n(0, 1);
-  for (std::size_t k = 1; k < start.keyframes.size(); ++k) {
-    Vector6d d;
-    d << 0.3 * n(rng), 0.3 * n(rng), 0.3 * n(rng), 0.003 * n(rng), 0.003 * n(rng), 0.003 * n(rng);
-    start.keyframes[k].cam_from_submap = SE3::Exp(d) * start.keyframes[k].cam_from_submap;
-    start.keyframes[k].focal = 530;
-  }
-  for (Landmark& lm : start.landmarks) lm.point_in_submap += Eigen::Vector3d(n(rng), n(rng), n(rng)) * 0.3;
+  Perturb(&start, 6, 0.3, 0.003);
+  for (std::size_t k = 1; k < start.keyframes.size(); ++k) start.keyframes[k].focal = 530;
   Scene dense = start, sparse = start;
   BundleAdjustmentOptions options;
   options.max_iterations = 50;
