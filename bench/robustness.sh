@@ -10,10 +10,10 @@
 # focal is estimated from the 0.8 x long-side guess) and, with CALIBRATED=1, also with the
 # clip's true intrinsics. Prints one row per run: estimated focal against the truth, whether
 # it was held (docs/algorithm.md, focal length), submaps, posed frames, ATE after Sim3 and the
-# map's median error (`glam eval`).
+# map's median error (`glam eval`), and the run's wall time.
 #
 # Usage: bench/robustness.sh [BUILD_DIR]   (default build; outputs in out/bench/robustness)
-# Variants: GLAM_MAP_ARGS="--klt-predicted-levels -1" adds options to every `glam map`, and
+# Variants: GLAM_MAP_ARGS="--detect-every 9" adds options to every `glam map`, and
 # RUN_TAG=name keeps that variant's outputs apart (out/bench/robustness/CLIP/uncalibrated-name).
 # Takes ~5 minutes on 2 cores (~10 with CALIBRATED=1).
 set -euo pipefail
