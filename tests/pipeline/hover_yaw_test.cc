@@ -54,12 +54,18 @@ TEST(HoverYaw, NoSubmapStartsOnAPureRotation) {
   EXPECT_GT(with_veto.trajectory.fraction_posed, 0.8);
 
   // The control: the same clip without the rotation check bootstraps a submap on two frames
-  // of the second hover and maps it metres wrong (measured ATE 1.86 m, map median 0.72 m). If
-  // this stops holding, the clip no longer tests the case.
+  // of the second hover, whose invented geometry is either placed metres wrong (measured ATE
+  // 1.86 m, map median 0.72 m) or cannot be linked to the map at all (measured after an
+  // equivalent solver change, 2026-12-05: its 306 frames disconnected, 65.8 % posed instead of
+  // 87 %); which of the two depends on details far from the bootstrap. If neither holds, the
+  // clip no longer tests the case.
   MappingOptions paper_bootstrap = WithoutRotationOnlyPoses();
   paper_bootstrap.submap.bootstrap_rotation_veto_fraction = 0;
   const eval::EvaluationResult without = MapAndEvaluate(paper_bootstrap, "no_veto");
-  EXPECT_GT(without.trajectory.ate_rmse, 3 * with_veto.trajectory.ate_rmse);
+  const bool placed_wrong = without.trajectory.ate_rmse > 3 * with_veto.trajectory.ate_rmse;
+  const bool lost = without.trajectory.fraction_posed < with_veto.trajectory.fraction_posed - 0.15;
+  EXPECT_TRUE(placed_wrong || lost) << "without the veto: ATE " << without.trajectory.ate_rmse << " m, "
+                                    << without.trajectory.fraction_posed * 100 << " % posed";
 }
 
 // SubmapOptions::hover_max_speed: the frames of each hovering yaw to unseen ground are posed by
