@@ -50,8 +50,21 @@ function(glam_add_test name)
   if(ARG_LABELS)
     list(APPEND props LABELS "${ARG_LABELS}")
   endif()
+  # gtest_discover_tests passes PROPERTIES through cmake_parse_arguments, which flattens a
+  # list value: FIXTURES_REQUIRED "a;b" would require a and read b as a property name (b then
+  # silently not required). So a test needing several fixtures requires one group fixture, set
+  # up by a no-op test that requires them all (CTest follows fixtures of setup tests).
   if(ARG_FIXTURES)
-    list(APPEND props FIXTURES_REQUIRED "${ARG_FIXTURES}")
+    list(LENGTH ARG_FIXTURES fixture_count)
+    if(fixture_count GREATER 1)
+      list(JOIN ARG_FIXTURES "+" fixture)
+      add_test(NAME fixture_group.${name} COMMAND ${CMAKE_COMMAND} -E true)
+      set_tests_properties(fixture_group.${name} PROPERTIES
+        FIXTURES_SETUP ${fixture} FIXTURES_REQUIRED "${ARG_FIXTURES}")
+    else()
+      set(fixture ${ARG_FIXTURES})
+    endif()
+    list(APPEND props FIXTURES_REQUIRED ${fixture})
   endif()
   gtest_discover_tests(${name}
     DISCOVERY_MODE PRE_TEST

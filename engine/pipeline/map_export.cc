@@ -22,16 +22,6 @@ struct ModelCounts {
   std::int64_t points = 0;
 };
 
-// The map's (connected) submaps in id order, placed in the world frame.
-std::vector<PlacedSubmap> MapSubmaps(const MapSnapshot& snapshot) {
-  std::vector<PlacedSubmap> map;
-  for (const SubmapPlacement& placement : snapshot.submaps) {
-    if (!placement.disconnected) map.push_back({placement.id, placement.world_from_submap});
-  }
-  std::sort(map.begin(), map.end(), [](const PlacedSubmap& a, const PlacedSubmap& b) { return a.id < b.id; });
-  return map;
-}
-
 // One model's trajectory.tum and points.ply from its submaps (ids ascending).
 ModelCounts WriteModel(const std::vector<PlacedSubmap>& placed, const fs::path& submaps_root,
                        const fs::path& dir, double fps) {
@@ -75,15 +65,28 @@ SE3 WorldFromCam(const Sim3& world_from_submap, const SE3& cam_from_submap) {
              world_from_submap * submap_from_cam.translation());
 }
 
+std::vector<PlacedSubmap> MapSubmaps(const MapSnapshot& snapshot) {
+  std::vector<PlacedSubmap> map;
+  for (const SubmapPlacement& placement : snapshot.submaps) {
+    if (!placement.disconnected) map.push_back({placement.id, placement.world_from_submap});
+  }
+  std::sort(map.begin(), map.end(), [](const PlacedSubmap& a, const PlacedSubmap& b) { return a.id < b.id; });
+  return map;
+}
+
+std::map<std::int64_t, Eigen::Vector3d> CameraCentres(const ChosenPoses& poses) {
+  std::map<std::int64_t, Eigen::Vector3d> centres;
+  for (const auto& [index, pose] : poses) centres.emplace_hint(centres.end(), index, pose.first.translation());
+  return centres;
+}
+
 std::map<std::int64_t, Eigen::Vector3d> CameraCentres(const std::vector<PlacedSubmap>& placed,
                                                       const fs::path& submaps_root) {
   ChosenPoses poses;
   for (const PlacedSubmap& entry : placed) {
     AddFramePoses(ReadSubmap(submaps_root, entry.id), entry.frame_from_submap, &poses);
   }
-  std::map<std::int64_t, Eigen::Vector3d> centres;
-  for (const auto& [index, pose] : poses) centres.emplace(index, pose.first.translation());
-  return centres;
+  return CameraCentres(poses);
 }
 
 std::map<std::int64_t, Eigen::Vector3d> WorldCameraCentres(const MapSnapshot& snapshot, const fs::path& submaps_root) {

@@ -59,6 +59,12 @@ struct PartModel {
 // The snapshot's disconnected parts in order of their first frame (the numbering of parts/<n>).
 std::vector<PartModel> DisconnectedParts(const MapSnapshot& snapshot, const std::filesystem::path& submaps_root);
 
+// The map's (connected) submaps of a snapshot, ids ascending, placed in the world frame.
+std::vector<PlacedSubmap> MapSubmaps(const MapSnapshot& snapshot);
+
+// The camera centres (frame index -> centre) of chosen poses.
+std::map<std::int64_t, Eigen::Vector3d> CameraCentres(const ChosenPoses& poses);
+
 // Camera centres by frame index of the placed submaps (ids ascending), in their model's frame,
 // one per frame by the rule of AddFramePoses.
 std::map<std::int64_t, Eigen::Vector3d> CameraCentres(const std::vector<PlacedSubmap>& placed,

@@ -27,6 +27,7 @@
 #include "engine/geo/geojson_track.h"
 #include "engine/geo/gps_track.h"
 #include "engine/pipeline/georeference_map.h"
+#include "engine/pipeline/live_georeference.h"
 #include "engine/pipeline/map_export.h"
 #include "engine/pipeline/resume_checkpoint.h"
 #include "engine/pipeline/tile_writer.h"
@@ -237,6 +238,12 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
       alignment.Push(std::make_shared<const Submap>(ReadSubmap(submaps_root, id)));
     }
   }
+  // Revisions go out in metres, east-north-up as soon as the GPS fit succeeds (live_georeference.h).
+  std::optional<LiveGeoreferencer> live_geo;
+  if (gps) live_geo.emplace(*gps, report.fps, options.georeference, submaps_root);
+  auto publishable = [&live_geo](std::shared_ptr<const MapSnapshot> snapshot) {
+    return live_geo ? live_geo->Apply(snapshot) : snapshot;
+  };
   BoundedQueue<FrameFeatures> queue(options.queue_capacity);
   std::atomic<bool> stop{false};
   const int min_features = options.submap.min_tracking_inliers;
@@ -290,6 +297,7 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
       const auto tiles_start = Clock::now();
       tiles.OnSubmapCompleted(submap);
       tile_writing += Seconds(tiles_start);
+      if (live_geo) live_geo->AddSubmap(submap);
       WriteCheckpoint(out_dir, MakeCheckpoint(builder, completed, i, report, run_id));
       writing += Seconds(write_start);
       GLAM_LOG_INFO("submap {} completed: frames {}-{}, {} keyframes, {} landmarks", submap.id,
@@ -309,7 +317,7 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
       alignment.RethrowIfFailed();
       std::optional<FrameFeatures> item = queue.PopFor(std::chrono::milliseconds(100));
       if (alignment.revision() > published_revision()) {  // a new map revision
-        tiles.OnRevision(*aligner.snapshot());
+        tiles.OnRevision(*publishable(aligner.snapshot()));
         emit(true);
       }
       if (!item) {
@@ -360,7 +368,15 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
     MapGeoreference geo = GeoreferenceMap(*snapshot, submaps_root, report.fps, *gps, options.georeference);
     report.georeference = geo.map;
     report.georeferenced_parts = std::move(geo.parts);
-    if (geo.snapshot) snapshot = std::move(geo.snapshot);
+    if (geo.snapshot) {
+      snapshot = std::move(geo.snapshot);
+    } else if (live_geo && live_geo->fit()) {
+      // Revisions went out in ENU during the run but the whole map's fit failed: the files are
+      // in the mapping frame, so the tileset must be too, as one more revision.
+      auto plain = std::make_shared<MapSnapshot>(*snapshot);
+      plain->revision = snapshot->revision + 1;
+      snapshot = std::move(plain);
+    }
   }
   const MapExportCounts exported = ExportWorldMap(*snapshot, submaps_root, out_dir, report.fps);
   WriteGeoJsonTrack(*snapshot, submaps_root, out_dir, report);

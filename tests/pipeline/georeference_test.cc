@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <random>
 
 #include <fmt/format.h>
@@ -14,6 +15,8 @@
 
 #include "engine/export/tum_trajectory.h"
 #include "engine/geo/geodetic.h"
+#include "engine/map/submap_io.h"
+#include "engine/pipeline/map_export.h"
 #include "engine/pipeline/mapping_job.h"
 #include "tests/support/exif_photo.h"
 #include "tests/support/temp_dir.h"
@@ -102,6 +105,66 @@ TEST(GeoreferenceEndToEnd, AVideoWithItsSrtIsMappedInMetresEastNorthUp) {
   EXPECT_FALSE(plain.georeference.ok);
   EXPECT_FALSE(nlohmann::json::parse(std::ifstream(dir / "plain" / "tileset.json"))["root"].contains("transform"));
   EXPECT_FALSE(fs::exists(dir / "plain" / "trajectory.geojson"));
+}
+
+// The map is in metres, east-north-up while it is built, not only at the end: every tileset.json
+// written during the run after the first successful GPS fit has the root transform, and its
+// submap placements put the camera centres where the drone was. Before, the live view stayed in
+// the mapping frame (arbitrary scale and heading) until the final revision.
+TEST(GeoreferenceEndToEnd, RevisionsWrittenWhileMappingAreAlreadyInMetresEastNorthUp) {
+  const fs::path dir = glam::testing::FreshTempDir("georeference_live");
+  fs::copy_file(kClip / "video.mp4", dir / "DJI_0002.MP4");
+  const std::vector<TimedPose> truth = ReadTumTrajectory(kClip / "gt_trajectory.tum");
+  std::ofstream(dir / "DJI_0002.SRT") << synth::DjiSrtFromTrajectory(truth, 1.0, 11);
+
+  MappingOptions options;
+  options.submap.keyframes_per_submap = 6;  // several submaps, so several revisions mid-run
+  std::map<std::int64_t, nlohmann::json> live_tilesets;  // revision -> tileset.json while mapping
+  const fs::path out = dir / "out";
+  const MappingReport report = RunMapping(dir / "DJI_0002.MP4", out, options, [&](const MappingProgress& p) {
+    if (p.stage != "mapping" || p.revision == 0 || live_tilesets.count(p.revision) > 0) return;
+    live_tilesets[p.revision] = nlohmann::json::parse(std::ifstream(out / "tileset.json"));
+  });
+  ASSERT_TRUE(report.georeference.ok) << report.georeference.reason;
+  ASSERT_GE(report.submaps, 3);
+  ASSERT_GE(live_tilesets.size(), 2u);
+
+  const Eigen::Vector3d shift = truth.front().world_from_cam.translation();
+  const auto frame_of = [](double t) -> std::optional<std::size_t> {
+    return static_cast<std::size_t>(std::llround(t * 30));
+  };
+  int georeferenced = 0;
+  for (const auto& [revision, tileset] : live_tilesets) {
+    EXPECT_EQ(tileset["extras"]["revision"], revision);
+    if (!tileset["root"].contains("transform")) {
+      EXPECT_EQ(georeferenced, 0) << "revision " << revision << " went back to the mapping frame";
+      continue;
+    }
+    ++georeferenced;
+    // The camera centres of the revision's connected submaps, placed by its transforms.
+    ChosenPoses poses;
+    for (const nlohmann::json& child : tileset["root"]["children"]) {
+      if (child["extras"]["disconnected"].get<bool>()) continue;
+      Eigen::Matrix4d world_from_submap;
+      for (int k = 0; k < 16; ++k) world_from_submap(k % 4, k / 4) = child["transform"][k].get<double>();
+      AddFramePoses(ReadSubmap(out / "submaps", child["extras"]["submap"].get<std::uint32_t>()),
+                    Sim3::FromMatrix(world_from_submap), &poses);
+    }
+    std::vector<TimedPose> mapped;
+    for (const auto& [index, pose] : poses) mapped.push_back({static_cast<double>(index) / 30, pose.first});
+    std::size_t count = 0;
+    const double rms = glam::testing::UnalignedCentreRms(mapped, truth, shift, frame_of, &count);
+    std::cout << fmt::format("live revision {}: {} frames posed in ENU, rms {:.3f} m\n", revision, count, rms);
+    // GPS noise 1 m per axis over the part of the track posed so far (at least 10 samples over
+    // 10 m); the final fit over the whole flight is held to 0.6 m above.
+    EXPECT_LT(rms, 1.5) << "revision " << revision;
+  }
+  // The flight is long enough for a fit after its first submaps, well before the end.
+  EXPECT_GE(georeferenced, 1);
+  // The final revision is the whole map's fit, written after the live ones.
+  const nlohmann::json final_tileset = nlohmann::json::parse(std::ifstream(out / "tileset.json"));
+  EXPECT_GT(final_tileset["extras"]["revision"].get<std::int64_t>(), live_tilesets.rbegin()->first);
+  EXPECT_TRUE(final_tileset["root"].contains("transform"));
 }
 
 // A flight in two pieces: two flights over different ground joined by a hard cut, so no frame

@@ -1,0 +1,65 @@
+// Georeferencing while the map grows. Without it a GPS-tagged flight is shown in the mapping
+// frame (the first submap's arbitrary scale and heading) for the whole run and jumps into
+// metres, east-north-up only when the final revision is written (georeference_map.h). With it,
+// every map revision thread 2 publishes is fitted to the GPS track as soon as the posed part of
+// the flight is long enough for a fit (GeoreferenceOptions: ≥ 10 samples over ≥ 10 m), so the
+// live viewer and 3D Tiles clients on a globe see the map in place and in metres from early
+// in the run, and later revisions only refine that fit.
+//
+// Why a cache of poses: a fit per revision needs every connected frame's camera centre. Reading
+// the submaps back from disk at every revision (as the final georeference does once) would cost
+// O(submaps) reads per revision; the frame poses alone are ~80 bytes per frame (8 MB for a
+// 100,000-frame flight), so they are kept from the moment a submap completes (or read from disk
+// once, for the submaps of an interrupted run a resumed one starts after).
+//
+// A revision keeps its number: it is the same alignment state, expressed in ENU. Once a
+// revision has been georeferenced, later ones stay in ENU: if a refit fails (e.g. GPS outliers
+// dominate a short stretch) the last good fit is reused rather than switching the viewer back to
+// the mapping frame. The final revision's fit (GeoreferenceMap) is computed afresh on the whole
+// map and also places the disconnected parts.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "engine/geo/georeference.h"
+#include "engine/geo/gps_track.h"
+#include "engine/map/map_snapshot.h"
+#include "engine/map/submap.h"
+
+namespace glam {
+
+class LiveGeoreferencer {
+ public:
+  // submaps_root: where completed submaps are persisted (read for submaps never passed to
+  // AddSubmap, i.e. those of an interrupted run). fps: frame index / fps = GPS track time.
+  LiveGeoreferencer(std::vector<GpsSample> gps, double fps, GeoreferenceOptions options,
+                    std::filesystem::path submaps_root);
+
+  // Keeps the completed submap's frame poses (nothing else) for later fits.
+  void AddSubmap(const Submap& submap);
+
+  // The snapshot in metres, east-north-up (same revision, every placement composed with the
+  // fit, ecef_from_world set), or the snapshot itself while no fit has succeeded yet.
+  std::shared_ptr<const MapSnapshot> Apply(const std::shared_ptr<const MapSnapshot>& snapshot);
+
+  // The fit the last georeferenced revision used (nullopt: none yet).
+  const std::optional<GeoreferenceResult>& fit() const { return fit_; }
+
+ private:
+  // The cached poses-only copy of submap `id`, read from disk on first use if needed.
+  const Submap& Poses(std::uint32_t id);
+
+  std::vector<GpsSample> gps_;
+  double fps_;
+  GeoreferenceOptions options_;
+  std::filesystem::path submaps_root_;
+  std::map<std::uint32_t, Submap> poses_;  // submap id -> frame poses only
+  std::optional<GeoreferenceResult> fit_;
+};
+
+}  // namespace glam
