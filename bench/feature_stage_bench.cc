@@ -6,6 +6,8 @@
 // the other worker competing for the cores. Prints a Markdown table (docs/benchmarks.md).
 //
 // Usage: glam_bench_feature_stage VIDEO [detect_every=6 [max_frames=300]]
+#include <malloc.h>
+
 #include <opencv2/core.hpp>
 
 #include <chrono>
@@ -49,6 +51,15 @@ int Run(int argc, char** argv) {
   const int detect_every = argc > 2 ? std::atoi(argv[2]) : 6;
   const int max_frames = argc > 3 ? std::atoi(argv[3]) : 300;
   cv::setNumThreads(1);
+  // Keep freed heap memory in the process. cv::SIFT allocates ~50 MB of pyramid buffers per
+  // call; with glibc's default (dynamic) trim and mmap thresholds a single-threaded loop like
+  // this one may hand them back to the kernel after every call and fault them in again on the
+  // next, and on this VM a page fault costs ~12 us: SIFT then measured 115-160 ms per 640x360
+  // frame instead of 30-65 ms, bimodally from one process to the next (perf stat: 151,000
+  // against 38,000 faults over 15 detections). The mapping pipeline does not show it (its
+  // faults track its resident size), so the benchmark should not either.
+  mallopt(M_MMAP_THRESHOLD, 32 << 20);
+  mallopt(M_TRIM_THRESHOLD, 512 << 20);
 
   std::vector<Variant> variants;
   const KltOptions base;  // the product's defaults
