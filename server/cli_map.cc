@@ -161,6 +161,10 @@ void RegisterMapCommand(CLI::App& app) {
                   "Downscale frames to this long side (px); 0 = never")
       ->capture_default_str();
   cmd->add_option("--stride", args->options.source.stride, "Use every N-th frame")->capture_default_str();
+  cmd->add_flag_callback(
+      "--name-order", [args] { args->options.source.photos_by_capture_time = false; },
+      "Photo folders: map the photos in name order; by default photos with an EXIF capture time are "
+      "mapped in capture order (report.json photos_reordered_by_time)");
   cmd->add_option("--keyframes-per-submap", args->options.submap.keyframes_per_submap,
                   "Keyframes at which a submap is completed (try 12 for footage that is one short "
                   "orbit: smaller submaps bend less; docs/benchmarks.md)")

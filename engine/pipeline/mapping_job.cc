@@ -169,6 +169,9 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
 
   MappingReport report;
   report.input = input.string();
+  if (const auto* folder = dynamic_cast<const ImageFolderSource*>(source.get())) {
+    report.photos_reordered_by_time = static_cast<std::int64_t>(folder->photos_reordered_by_time());
+  }
   report.fps = info.fps > 0 ? info.fps : 1.0;
   report.initial_focal = intrinsics.fx;
   report.sift_max_features = options.sift.max_features;

@@ -212,6 +212,7 @@ nlohmann::json MappingReport::ToJson() const {
           {"processing_fps", processing_fps},
           {"processing_size", {processing_width, processing_height}},
           {"input_ended_early", input_ended_early},
+          {"photos_reordered_by_time", photos_reordered_by_time},
           {"georeference", GeoreferenceJson(gps_track, georeference, georeferenced_parts)},
           {"warnings", warnings},
           {"timings_s",

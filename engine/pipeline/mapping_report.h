@@ -82,6 +82,9 @@ struct MappingReport {
   int processing_width = 0;
   int processing_height = 0;
   bool input_ended_early = false;
+  // Photo folders: how many photos their EXIF capture time put somewhere else than their place
+  // in name order (ImageFolderSource; 0: name order, and always 0 for a video).
+  std::int64_t photos_reordered_by_time = 0;
   // Georeferencing from GPS telemetry (MappingOptions::gps_track): the file used (empty when
   // none), and the fit (ok: the outputs are in metres, east-north-up around its origin).
   std::string gps_track;

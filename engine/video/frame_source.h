@@ -42,6 +42,10 @@ struct FrameSourceOptions {
   int max_image_size = 1280;
   // Deliver every stride-th frame (indices start, start + stride, ...).
   int stride = 1;
+  // Image folders: the photos that carry an EXIF capture time are put in capture order (each
+  // taking a place a timed photo had in name order); false: natural name order only
+  // (image_folder_source.h).
+  bool photos_by_capture_time = true;
 
   void Check() const;  // throws InputError
 };

@@ -3,12 +3,15 @@
 #include <algorithm>
 #include <array>
 #include <cctype>
+#include <optional>
+#include <utility>
 #include <string_view>
 
 #include <opencv2/imgcodecs.hpp>
 
 #include "engine/core/error.h"
 #include "engine/core/logging.h"
+#include "engine/video/photo_capture_time.h"
 
 namespace glam {
 namespace {
@@ -85,6 +88,7 @@ ImageFolderSource::ImageFolderSource(const std::filesystem::path& folder,
   std::sort(files_.begin(), files_.end(), [](const auto& a, const auto& b) {
     return NaturalLess(a.filename().string(), b.filename().string());
   });
+  if (options_.photos_by_capture_time) OrderByCaptureTime();
 
   // The first *decodable* image sets the size: junk with an image name that sorts first (macOS
   // "._0001.jpg" resource forks on SD cards) must not reject the whole folder. Next() skips
@@ -100,6 +104,27 @@ ImageFolderSource::ImageFolderSource(const std::filesystem::path& folder,
   info_.original_size = first.size();
   info_.processing_size = ProcessingSize(info_.original_size, options_.max_image_size);
   info_.scale = static_cast<double>(info_.processing_size.width) / info_.original_size.width;
+}
+
+void ImageFolderSource::OrderByCaptureTime() {
+  std::vector<std::size_t> slots;  // places of the timed photos in name order
+  std::vector<std::pair<std::int64_t, std::filesystem::path>> timed;
+  for (std::size_t i = 0; i < files_.size(); ++i) {
+    if (const std::optional<std::int64_t> ms = ReadPhotoCaptureTimeMs(files_[i])) {
+      slots.push_back(i);
+      timed.emplace_back(*ms, files_[i]);
+    }
+  }
+  std::stable_sort(timed.begin(), timed.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (std::size_t k = 0; k < slots.size(); ++k) {
+    if (files_[slots[k]] != timed[k].second) ++photos_reordered_by_time_;
+    files_[slots[k]] = timed[k].second;
+  }
+  if (photos_reordered_by_time_ > 0) {
+    GLAM_LOG_INFO("image folder: {} of {} photos are out of name order by their EXIF capture time; mapping them in "
+                  "capture order",
+                  photos_reordered_by_time_, files_.size());
+  }
 }
 
 std::optional<Frame> ImageFolderSource::Next() {

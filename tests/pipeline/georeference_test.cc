@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <random>
 
@@ -250,18 +251,18 @@ TEST(GeoreferenceEndToEnd, AnUnusableSidecarWarnsAndAGivenOneMustParse) {
   EXPECT_THROW(RunMapping(dir / "clip.mp4", dir / "out2", options), InputError);
 }
 
-// A folder of drone photos with EXIF GPS (every 6th frame of the clip, positions 1 m off per
-// axis, the first exact) is georeferenced like a video with its .SRT.
-TEST(GeoreferenceEndToEnd, APhotoFolderWithExifGpsIsMappedInMetresEastNorthUp) {
-  const fs::path dir = glam::testing::FreshTempDir("georeference_photos");
+// Every 6th frame of the clip as a drone photo with EXIF GPS (1 m off per axis, the first
+// exact) and a capture time 2 s apart, named by `name_of(k)` for the k-th photo of the flight;
+// returns the clip frame of each photo, in flight order.
+std::vector<std::size_t> WriteFlightPhotos(const fs::path& folder, const std::function<std::string(std::size_t)>& name_of) {
   const std::vector<TimedPose> truth = ReadTumTrajectory(kClip / "gt_trajectory.tum");
   const EnuFrame frame(kOrigin);
   std::mt19937 rng(11);
   std::normal_distribution<double> noise(0.0, 1.0);
   cv::VideoCapture video((kClip / "video.mp4").string(), cv::CAP_FFMPEG);
-  ASSERT_TRUE(video.isOpened());
+  EXPECT_TRUE(video.isOpened());
   constexpr int kEvery = 6;
-  fs::create_directories(dir / "photos");
+  fs::create_directories(folder);
   cv::Mat image;
   std::vector<std::size_t> frame_of_photo;
   for (std::size_t i = 0; video.read(image); ++i) {
@@ -269,23 +270,72 @@ TEST(GeoreferenceEndToEnd, APhotoFolderWithExifGpsIsMappedInMetresEastNorthUp) {
     Eigen::Vector3d enu = truth[i].world_from_cam.translation();
     if (i > 0) enu += Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
     const Geodetic g = frame.GeodeticFromEnu(enu);
-    glam::testing::WritePhoto(dir / "photos" / fmt::format("DJI_{:04}.JPG", frame_of_photo.size()), image, &g);
+    const std::size_t k = frame_of_photo.size();
+    const std::string time = fmt::format("2026:12:05 10:{:02}:{:02}", (2 * k) / 60, (2 * k) % 60);
+    glam::testing::WritePhoto(folder / name_of(k), image, &g, time);
     frame_of_photo.push_back(i);
   }
+  return frame_of_photo;
+}
+
+// The georeferenced trajectory of a photo folder against the truth (no alignment), over all
+// `*compared` photos it posed; `photos`: the clip frame of each photo in flight order.
+double PhotoFolderRms(const fs::path& out, const std::vector<std::size_t>& photos, std::size_t* compared) {
+  const std::vector<TimedPose> truth = ReadTumTrajectory(kClip / "gt_trajectory.tum");
+  const Eigen::Vector3d shift = truth.front().world_from_cam.translation();
+  const std::vector<TimedPose> mapped = ReadTumTrajectory(out / "trajectory.tum");
+  const double rms = glam::testing::UnalignedCentreRms(mapped, truth, shift, glam::testing::PhotoFrames(photos), compared);
+  EXPECT_EQ(*compared, mapped.size());
+  return rms;
+}
+
+// A folder of drone photos with EXIF GPS is georeferenced like a video with its .SRT.
+TEST(GeoreferenceEndToEnd, APhotoFolderWithExifGpsIsMappedInMetresEastNorthUp) {
+  const fs::path dir = glam::testing::FreshTempDir("georeference_photos");
+  const std::vector<std::size_t> frame_of_photo =
+      WriteFlightPhotos(dir / "photos", [](std::size_t k) { return fmt::format("DJI_{:04}.JPG", k); });
   const MappingReport report = RunMapping(dir / "photos", dir / "out", MappingOptions{});
   ASSERT_TRUE(report.georeference.ok) << report.georeference.reason;
   EXPECT_EQ(report.gps_track, "EXIF GPS of the photos");
   EXPECT_EQ(report.georeference.samples_matched, static_cast<int>(report.frames_posed));
-  const Eigen::Vector3d shift = truth.front().world_from_cam.translation();
-  const std::vector<TimedPose> mapped = ReadTumTrajectory(dir / "out" / "trajectory.tum");
-  ASSERT_GT(mapped.size(), frame_of_photo.size() * 8 / 10);
+  EXPECT_EQ(report.photos_reordered_by_time, 0);
   std::size_t compared = 0;
-  const double rms = glam::testing::UnalignedCentreRms(mapped, truth, shift, glam::testing::PhotoFrames(frame_of_photo),
-                                                       &compared);
-  EXPECT_EQ(compared, mapped.size());
+  const double rms = PhotoFolderRms(dir / "out", frame_of_photo, &compared);
   std::cout << fmt::format("photo folder georeferenced: rms {:.3f} m over {} photos (fit rms {:.2f} m)\n", rms,
-                           mapped.size(), report.georeference.rms_m);
+                           compared, report.georeference.rms_m);
+  EXPECT_GT(compared, frame_of_photo.size() * 8 / 10);
   EXPECT_LT(rms, 0.8);
+}
+
+// The same flight with the camera's counter wrapping after its first 10 photos (DJI_9990 ...
+// DJI_9999, then DJI_0000 ...): by name the flight would start with its 11th photo and jump
+// back to its start two thirds through. Mapped in EXIF capture order it is the same flight.
+TEST(GeoreferenceEndToEnd, PhotosAreMappedInCaptureOrderNotNameOrder) {
+  const fs::path dir = glam::testing::FreshTempDir("georeference_photo_order");
+  const std::vector<std::size_t> frame_of_photo = WriteFlightPhotos(
+      dir / "photos", [](std::size_t k) { return fmt::format("DJI_{:04}.JPG", (9990 + k) % 10000); });
+  const MappingReport report = RunMapping(dir / "photos", dir / "out", MappingOptions{});
+  ASSERT_TRUE(report.georeference.ok) << report.georeference.reason;
+  EXPECT_EQ(report.photos_reordered_by_time, static_cast<std::int64_t>(frame_of_photo.size()));
+  std::size_t compared = 0;
+  const double rms = PhotoFolderRms(dir / "out", frame_of_photo, &compared);
+  std::cout << fmt::format("wrapped names, capture order: rms {:.3f} m over {} photos, {} submaps\n", rms, compared,
+                           report.submaps);
+  EXPECT_GT(compared, frame_of_photo.size() * 8 / 10);
+  EXPECT_LT(rms, 0.8);
+  const nlohmann::json j = nlohmann::json::parse(std::ifstream(dir / "out" / "report.json"));
+  EXPECT_EQ(j["photos_reordered_by_time"], frame_of_photo.size());
+
+  // Control: in name order (`glam map --name-order`) the same photos are not that flight.
+  MappingOptions by_name;
+  by_name.source.photos_by_capture_time = false;
+  const MappingReport named = RunMapping(dir / "photos", dir / "by_name", by_name);
+  EXPECT_EQ(named.photos_reordered_by_time, 0);
+  std::size_t named_compared = 0;
+  const double named_rms = PhotoFolderRms(dir / "by_name", frame_of_photo, &named_compared);
+  std::cout << fmt::format("wrapped names, name order: rms {:.3f} m over {} photos, {} submaps\n", named_rms,
+                           named_compared, named.submaps);
+  EXPECT_TRUE(named_rms > 5 * rms || named_compared < compared * 8 / 10);
 }
 
 }  // namespace

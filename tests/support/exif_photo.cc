@@ -2,6 +2,7 @@
 
 #include <libexif/exif-data.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -12,14 +13,15 @@
 namespace glam::testing {
 namespace {
 
-ExifEntry* AddEntry(ExifData* data, ExifMem* mem, ExifTag tag, ExifFormat format, unsigned components) {
+ExifEntry* AddEntry(ExifData* data, ExifMem* mem, ExifTag tag, ExifFormat format, unsigned components,
+                    ExifIfd ifd = EXIF_IFD_GPS) {
   ExifEntry* e = exif_entry_new_mem(mem);
   e->tag = tag;
   e->format = format;
   e->components = components;
   e->size = exif_format_get_size(format) * components;
   e->data = static_cast<unsigned char*>(exif_mem_alloc(mem, e->size));
-  exif_content_add_entry(data->ifd[EXIF_IFD_GPS], e);
+  exif_content_add_entry(data->ifd[ifd], e);
   exif_entry_unref(e);
   return e;
 }
@@ -40,22 +42,31 @@ void SetRef(ExifData* data, ExifMem* mem, ExifTag tag, char ref) {
 
 }  // namespace
 
-void WritePhoto(const std::filesystem::path& path, const cv::Mat& image, const Geodetic* g) {
+void WritePhoto(const std::filesystem::path& path, const cv::Mat& image, const Geodetic* g,
+                const std::string& date_time_original) {
   std::vector<unsigned char> jpeg;
   cv::imencode(".jpg", image, jpeg);
-  if (g != nullptr) {
+  if (g != nullptr || !date_time_original.empty()) {
     ExifMem* mem = exif_mem_new_default();
     ExifData* data = exif_data_new_mem(mem);
     exif_data_set_byte_order(data, EXIF_BYTE_ORDER_INTEL);
-    SetDms(data, mem, static_cast<ExifTag>(EXIF_TAG_GPS_LATITUDE), std::abs(g->latitude_deg));
-    SetRef(data, mem, static_cast<ExifTag>(EXIF_TAG_GPS_LATITUDE_REF), g->latitude_deg < 0 ? 'S' : 'N');
-    SetDms(data, mem, static_cast<ExifTag>(EXIF_TAG_GPS_LONGITUDE), std::abs(g->longitude_deg));
-    SetRef(data, mem, static_cast<ExifTag>(EXIF_TAG_GPS_LONGITUDE_REF), g->longitude_deg < 0 ? 'W' : 'E');
-    ExifEntry* alt = AddEntry(data, mem, static_cast<ExifTag>(EXIF_TAG_GPS_ALTITUDE), EXIF_FORMAT_RATIONAL, 1);
-    exif_set_rational(alt->data, EXIF_BYTE_ORDER_INTEL,
-                      {static_cast<ExifLong>(std::llround(std::abs(g->altitude_m) * 100)), 100});
-    ExifEntry* alt_ref = AddEntry(data, mem, static_cast<ExifTag>(EXIF_TAG_GPS_ALTITUDE_REF), EXIF_FORMAT_BYTE, 1);
-    alt_ref->data[0] = g->altitude_m < 0 ? 1 : 0;
+    if (!date_time_original.empty()) {
+      ExifEntry* e = AddEntry(data, mem, EXIF_TAG_DATE_TIME_ORIGINAL, EXIF_FORMAT_ASCII,
+                              static_cast<unsigned>(date_time_original.size() + 1), EXIF_IFD_EXIF);
+      std::copy(date_time_original.begin(), date_time_original.end(), e->data);
+      e->data[date_time_original.size()] = 0;
+    }
+    if (g != nullptr) {
+      SetDms(data, mem, static_cast<ExifTag>(EXIF_TAG_GPS_LATITUDE), std::abs(g->latitude_deg));
+      SetRef(data, mem, static_cast<ExifTag>(EXIF_TAG_GPS_LATITUDE_REF), g->latitude_deg < 0 ? 'S' : 'N');
+      SetDms(data, mem, static_cast<ExifTag>(EXIF_TAG_GPS_LONGITUDE), std::abs(g->longitude_deg));
+      SetRef(data, mem, static_cast<ExifTag>(EXIF_TAG_GPS_LONGITUDE_REF), g->longitude_deg < 0 ? 'W' : 'E');
+      ExifEntry* alt = AddEntry(data, mem, static_cast<ExifTag>(EXIF_TAG_GPS_ALTITUDE), EXIF_FORMAT_RATIONAL, 1);
+      exif_set_rational(alt->data, EXIF_BYTE_ORDER_INTEL,
+                        {static_cast<ExifLong>(std::llround(std::abs(g->altitude_m) * 100)), 100});
+      ExifEntry* alt_ref = AddEntry(data, mem, static_cast<ExifTag>(EXIF_TAG_GPS_ALTITUDE_REF), EXIF_FORMAT_BYTE, 1);
+      alt_ref->data[0] = g->altitude_m < 0 ? 1 : 0;
+    }
     unsigned char* block = nullptr;
     unsigned int size = 0;
     exif_data_save_data(data, &block, &size);  // "Exif\0\0" + TIFF

@@ -6,6 +6,8 @@
 #include "engine/core/error.h"
 #include "engine/video/frame_source.h"
 #include "engine/video/image_folder_source.h"
+#include "engine/video/photo_capture_time.h"
+#include "tests/support/exif_photo.h"
 #include "tests/video/test_media.h"
 
 namespace glam {
@@ -87,6 +89,68 @@ TEST_F(ImageFolderSourceTest, EmptyOrImagelessFolderIsInputError) {
     EXPECT_NE(std::string(e.what()).find("no image files"), std::string::npos) << e.what();
   }
   EXPECT_THROW(ProbeVideo(dir_), InputError);
+}
+
+// Photos copied from two card folders (the camera's counter restarted) and a wrapped counter:
+// by name the flight would jump back and forth; by EXIF capture time it is in order. A file
+// without a capture time keeps its place in name order.
+TEST_F(ImageFolderSourceTest, PhotosWithACaptureTimeAreInCaptureOrder) {
+  const cv::Mat image = MakeFrame({200, 100}, 0);
+  // name -> capture time (the flight's order: C, D, E, A, B by name is A B C D E)
+  glam::testing::WritePhoto(dir_ / "DJI_0001.JPG", image, nullptr, "2026:12:05 10:00:30");  // 4th
+  glam::testing::WritePhoto(dir_ / "DJI_0002.JPG", image, nullptr, "2026:12:05 10:00:32");  // 5th
+  ASSERT_TRUE(cv::imwrite((dir_ / "DJI_0003.png").string(), image));                         // no EXIF
+  glam::testing::WritePhoto(dir_ / "DJI_9998.JPG", image, nullptr, "2026:12:05 10:00:00");  // 1st
+  glam::testing::WritePhoto(dir_ / "DJI_9999.JPG", image, nullptr, "2026:12:05 10:00:02");  // 2nd
+  glam::testing::WritePhoto(dir_ / "DJI_9999_1.JPG", image, nullptr, "2026:12:05 10:00:02");  // same second
+
+  const auto names = [](const ImageFolderSource& source) {
+    std::vector<std::string> out;
+    for (const auto& f : source.files()) out.push_back(f.filename().string());
+    return out;
+  };
+  const ImageFolderSource by_time(dir_, FrameSourceOptions{});
+  EXPECT_EQ(names(by_time), (std::vector<std::string>{"DJI_9998.JPG", "DJI_9999.JPG", "DJI_0003.png",
+                                                      "DJI_9999_1.JPG", "DJI_0001.JPG", "DJI_0002.JPG"}));
+  EXPECT_EQ(by_time.photos_reordered_by_time(), 5u);
+  FrameSourceOptions name_order;
+  name_order.photos_by_capture_time = false;
+  const ImageFolderSource by_name(dir_, name_order);
+  EXPECT_EQ(names(by_name), (std::vector<std::string>{"DJI_0001.JPG", "DJI_0002.JPG", "DJI_0003.png",
+                                                      "DJI_9998.JPG", "DJI_9999.JPG", "DJI_9999_1.JPG"}));
+  EXPECT_EQ(by_name.photos_reordered_by_time(), 0u);
+  // Frames come in that order, indexed (and timed) by their place.
+  auto source = OpenFrameSource(dir_);
+  std::vector<int64_t> indices;
+  while (auto frame = source->Next()) indices.push_back(frame->index);
+  EXPECT_EQ(indices, (std::vector<int64_t>{0, 1, 2, 3, 4, 5}));
+}
+
+TEST(PhotoCaptureTime, ParsesExifDateTimeWithSubSeconds) {
+  EXPECT_EQ(ParseExifDateTimeMs("1970:01:01 00:00:00"), 0);
+  EXPECT_EQ(ParseExifDateTimeMs("1970:01:02 00:00:01"), 86401000);
+  EXPECT_EQ(ParseExifDateTimeMs("2000:03:01 00:00:00"), 951868800000);  // after a leap day
+  EXPECT_EQ(ParseExifDateTimeMs("2026:12:05 10:00:00", "5"), *ParseExifDateTimeMs("2026:12:05 10:00:00") + 500);
+  EXPECT_EQ(ParseExifDateTimeMs("2026:12:05 10:00:00", "057"), *ParseExifDateTimeMs("2026:12:05 10:00:00") + 57);
+  EXPECT_EQ(ParseExifDateTimeMs("2026:12:05 10:00:00", "0571"), *ParseExifDateTimeMs("2026:12:05 10:00:00") + 57);
+  // Unset clocks and malformed values.
+  EXPECT_FALSE(ParseExifDateTimeMs("0000:00:00 00:00:00").has_value());
+  EXPECT_FALSE(ParseExifDateTimeMs("    :  :     :  :  ").has_value());
+  EXPECT_FALSE(ParseExifDateTimeMs("2026-12-05 10:00:00").has_value());
+  EXPECT_FALSE(ParseExifDateTimeMs("2026:13:05 10:00:00").has_value());
+  EXPECT_FALSE(ParseExifDateTimeMs("2026:12:05 10:00").has_value());
+  EXPECT_FALSE(ParseExifDateTimeMs("").has_value());
+}
+
+TEST_F(ImageFolderSourceTest, ReadsTheCaptureTimeOfAPhoto) {
+  const cv::Mat image = MakeFrame({64, 32}, 0);
+  glam::testing::WritePhoto(dir_ / "timed.jpg", image, nullptr, "2026:12:05 10:00:30");
+  glam::testing::WritePhoto(dir_ / "plain.jpg", image, nullptr);
+  std::ofstream(dir_ / "broken.jpg") << "not a jpeg";
+  EXPECT_EQ(ReadPhotoCaptureTimeMs(dir_ / "timed.jpg"), ParseExifDateTimeMs("2026:12:05 10:00:30"));
+  EXPECT_FALSE(ReadPhotoCaptureTimeMs(dir_ / "plain.jpg").has_value());
+  EXPECT_FALSE(ReadPhotoCaptureTimeMs(dir_ / "broken.jpg").has_value());
+  EXPECT_FALSE(ReadPhotoCaptureTimeMs(dir_ / "missing.jpg").has_value());
 }
 
 TEST(NaturalLess, OrdersDigitRunsByValue) {
