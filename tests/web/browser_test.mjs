@@ -264,6 +264,15 @@ async function main() {
     check(geojson.type === 'FeatureCollection' && path.length === report.frames_posed &&
       Math.abs(path[0][1] - report.georeference.origin.latitude) < 1e-4 && Math.abs(path[0][0] - report.georeference.origin.longitude) < 1e-4,
       `the panel's GeoJSON path link serves ${path.length} positions (frames posed ${report.frames_posed}) starting at the origin`);
+    // The viewer reads the same place from the tileset's root transform (ECEF of the ENU
+    // origin), which it has from the first georeferenced revision on, while the job runs.
+    check(viewer.origin && Math.abs(viewer.origin.latitude - report.georeference.origin.latitude) < 1e-7 &&
+      Math.abs(viewer.origin.longitude - report.georeference.origin.longitude) < 1e-7 &&
+      Math.abs(viewer.origin.altitude - report.georeference.origin.altitude) < 0.01,
+      `the tileset's root transform puts the map's origin at ${JSON.stringify(viewer.origin)} (report.json: ` +
+      `${JSON.stringify(report.georeference.origin)})`);
+    check(viewer.firstGeoreferencedRevision !== null && viewer.firstGeoreferencedRevision <= viewer.revision,
+      `first georeferenced revision the viewer saw: ${viewer.firstGeoreferencedRevision}`);
     check(Array.isArray(tileset.root.transform) && tileset.root.transform.length === 16 &&
       Math.hypot(tileset.root.transform[12], tileset.root.transform[13], tileset.root.transform[14]) > 6.3e6,
       'the georeferenced tileset has a root transform to earth-centred coordinates (the viewer ignores it)');

@@ -21,6 +21,9 @@ export function createMapTiles(scene, jobId, onChange) {
   const counters = {
     revision: -1, tilesLoaded: 0, pointsLoaded: 0, pointsConnected: 0, disconnected: 0, expectedTiles: 0,
     tileFetches: {}, transformUpdates: 0, staleTilesets: 0, revisionsApplied: [], bytesLoaded: 0, errors: [],
+    // Where the map is on the earth ({latitude, longitude, altitude} of its ENU origin) once a
+    // revision was georeferenced, and the first revision that was.
+    origin: null, firstGeoreferencedRevision: null,
   };
   let syncing = null;
   let dirty = false;
@@ -135,6 +138,10 @@ export function createMapTiles(scene, jobId, onChange) {
     for (const entry of [...tiles.values()]) if (!seen.has(entry.submap)) remove(entry);
     if (tileset.revision !== counters.revision) counters.revisionsApplied.push(tileset.revision);
     counters.revision = tileset.revision;
+    counters.origin = tileset.origin;
+    if (tileset.origin && counters.firstGeoreferencedRevision === null) {
+      counters.firstGeoreferencedRevision = tileset.revision;
+    }
     recount();
     scene.invalidate();
     counters.expectedTiles = tileset.tiles.length;

@@ -39,6 +39,14 @@ export async function openMapView(root, jobId) {
       autoFitDone = true;
     }
     stats.set({ revision: c.revision, tilesLoaded: c.tilesLoaded, pointsLoaded: c.pointsLoaded, disconnected: c.disconnected });
+    // A map georeferenced while it is built: where it is, from the tileset, until report.json
+    // (at the end) gives the fit's rms and the GeoJSON path too.
+    const fromReport = viewer.location && viewer.location.rmsM !== null;
+    if (!fromReport && (c.origin || viewer.location)) {
+      viewer.location = c.origin
+        ? { latitude: c.origin.latitude, longitude: c.origin.longitude, rmsM: null, geojsonUrl: null } : null;
+      stats.set({ location: viewer.location });
+    }
   });
 
   // The tile counters, live (revision, tilesLoaded, pointsLoaded, pointsConnected, ...).

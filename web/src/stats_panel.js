@@ -3,15 +3,18 @@
 
 import { escapeHtml, formatCount, formatDuration } from './format.js';
 
-// values.location: { latitude, longitude, rmsM, geojsonUrl } of a georeferenced map.
+// values.location: { latitude, longitude, rmsM, geojsonUrl } of a georeferenced map; rmsM and
+// geojsonUrl are null while the job runs (the location then comes from tileset.json).
 function locationCell(location) {
   if (!location) return '–';
   const { latitude: lat, longitude: lon } = location;
   const text = `${Math.abs(lat).toFixed(5)}° ${lat >= 0 ? 'N' : 'S'}, ${Math.abs(lon).toFixed(5)}° ${lon >= 0 ? 'E' : 'W'}`;
   const osm = `https://www.openstreetmap.org/?mlat=${lat.toFixed(6)}&mlon=${lon.toFixed(6)}#map=17/${lat.toFixed(6)}/${lon.toFixed(6)}`;
-  return `<span id="map-location" title="GPS fit rms ${location.rmsM.toFixed(2)} m">${text}</span> ` +
-    `<a href="${escapeHtml(osm)}" target="_blank" rel="noopener">map</a> ` +
-    `<a href="${escapeHtml(location.geojsonUrl)}" download="trajectory.geojson">path</a>`;
+  const title = location.rmsM === null ? 'GPS fit of the map so far' : `GPS fit rms ${location.rmsM.toFixed(2)} m`;
+  const path = location.geojsonUrl === null ? ''
+    : ` <a href="${escapeHtml(location.geojsonUrl)}" download="trajectory.geojson">path</a>`;
+  return `<span id="map-location" title="${title}">${text}</span> ` +
+    `<a href="${escapeHtml(osm)}" target="_blank" rel="noopener">map</a>${path}`;
 }
 
 export function createStatsPanel(element) {

@@ -1,8 +1,11 @@
 // Reads a job's tileset.json (3D Tiles 1.1, docs/file-formats.md) into what the viewer needs:
-// the revision and, per submap, the tile URL, world_from_submap and the disconnected flag.
+// the revision, where a georeferenced map is on the earth (the origin of its east-north-up
+// world, from the root transform) and, per submap, the tile URL, world_from_submap and the
+// disconnected flag.
 
 import * as THREE from 'three';
 import { apiFetch, apiUrl } from './api.js';
+import { geodeticFromEcef } from './geodesy.js';
 
 // glTF content is y-up; 3D Tiles clients rotate it +90 deg about X to the tileset's z-up
 // frame (the GLB stores submap (x, y, z) as (x, z, -y); this rotation maps it back).
@@ -43,5 +46,8 @@ export function parseTileset(json, baseUrl) {
       box: child.boundingVolume && child.boundingVolume.box,
     });
   }
-  return { revision, tiles };
+  // ECEF from ENU: its translation (column-major 12..14) is the ENU origin.
+  const t = json.root && json.root.transform;
+  const origin = Array.isArray(t) && t.length === 16 ? geodeticFromEcef(t[12], t[13], t[14]) : null;
+  return { revision, tiles, origin };
 }
