@@ -15,6 +15,7 @@
 #include "engine/geo/geodetic.h"
 #include "engine/map/submap_io.h"
 #include "engine/pipeline/map_export.h"
+#include "tests/pipeline/posed_submap.h"
 #include "tests/support/temp_dir.h"
 
 namespace glam {
@@ -32,22 +33,11 @@ Eigen::Vector3d TrueCentre(std::int64_t i) {
 // The mapping frame: what the map would be in without GPS (arbitrary scale, heading, origin).
 const Sim3 kWorldFromEnu(0.05, SO3::Exp(Eigen::Vector3d(0.02, -0.01, 1.1)), Eigen::Vector3d(3, -2, 1));
 
-// A submap posing frames [first, last], its own frame placed in the mapping frame.
+// A submap posing frames [first, last] of the flight, its own frame placed in the mapping frame.
 Submap PosedSubmap(std::uint32_t id, std::int64_t first, std::int64_t last, const Sim3& world_from_submap) {
-  Submap s;
-  s.id = id;
-  s.first_frame = first;
-  s.last_frame = last;
-  for (std::int64_t i = first; i <= last; ++i) {
-    FramePose fp;
-    fp.frame_index = i;
-    fp.timestamp_s = static_cast<double>(i) / kFps;
-    fp.pnp_inliers = 100;
-    const Eigen::Vector3d centre_in_submap = world_from_submap.Inverse() * (kWorldFromEnu * TrueCentre(i));
-    fp.cam_from_submap = SE3(SO3(), -centre_in_submap);
-    s.frame_poses.push_back(fp);
-  }
-  return s;
+  const Sim3 submap_from_enu = world_from_submap.Inverse() * kWorldFromEnu;
+  return glam::testing::PosedSubmap(id, first, last,
+                                    [&](std::int64_t i) { return Eigen::Vector3d(submap_from_enu * TrueCentre(i)); });
 }
 
 std::vector<GpsSample> GpsTrack(std::int64_t frames) {

@@ -10,6 +10,7 @@
 #include "engine/export/tum_trajectory.h"
 #include "engine/map/submap_io.h"
 #include "engine/pipeline/mapping_report.h"
+#include "tests/pipeline/posed_submap.h"
 
 namespace glam {
 namespace {
@@ -34,17 +35,7 @@ TEST(MapExport, WorldFromCamComposesSim3AndCameraPose) {
 }
 
 Submap FrameOnlySubmap(std::uint32_t id, std::int64_t first, std::int64_t last, double x) {
-  Submap s;
-  s.id = id;
-  s.first_frame = first;
-  s.last_frame = last;
-  for (std::int64_t i = first; i <= last; ++i) {
-    FramePose fp;
-    fp.frame_index = i;
-    fp.cam_from_submap = SE3(SO3(), Eigen::Vector3d(-x, 0, 0));
-    s.frame_poses.push_back(fp);
-  }
-  return s;
+  return glam::testing::PosedSubmap(id, first, last, [x](std::int64_t) { return Eigen::Vector3d(x, 0, 0); });
 }
 
 SubmapPlacement Placed(std::uint32_t id, const Sim3& world_from_submap, std::int64_t first, std::int64_t last,
