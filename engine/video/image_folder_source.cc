@@ -4,8 +4,8 @@
 #include <array>
 #include <cctype>
 #include <optional>
-#include <utility>
 #include <string_view>
+#include <utility>
 
 #include <opencv2/imgcodecs.hpp>
 
