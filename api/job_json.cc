@@ -23,6 +23,11 @@ int GetInt(const json& j, const char* key) {
   return static_cast<int>(v);
 }
 
+bool GetBool(const json& j, const char* key) {
+  if (!j.is_boolean()) throw InputError(fmt::format("options.{} must be true or false, got {}", key, j.dump()));
+  return j.get<bool>();
+}
+
 double GetNumber(const json& j, const char* key) {
   if (!j.is_number()) {
     throw InputError(fmt::format("options.{} must be a number, got {}", key, j.dump()));
@@ -93,10 +98,9 @@ JobOptions ParseJobOptions(const json& j) {
                                      *o.detect_every));
       }
     } else if (key == "fixed_k1") {
-      if (!value.is_boolean()) {
-        throw InputError(fmt::format("options.fixed_k1 must be true or false, got {}", value.dump()));
-      }
-      o.fixed_k1 = value.get<bool>();
+      o.fixed_k1 = GetBool(value, "fixed_k1");
+    } else if (key == "name_order") {
+      o.name_order = GetBool(value, "name_order");
     } else if (key == "smooth_window_s") {
       o.smooth_window_s = GetNumber(value, "smooth_window_s");
       if (!(*o.smooth_window_s >= 0 && *o.smooth_window_s <= 5)) {
@@ -106,7 +110,7 @@ JobOptions ParseJobOptions(const json& j) {
     } else {
       throw InputError(fmt::format(
           "options: unknown key \"{}\" (known: name, stride, focal, intrinsics, "
-          "keyframes_per_submap, max_image_size, detect_every, fixed_k1, smooth_window_s)",
+          "keyframes_per_submap, max_image_size, detect_every, fixed_k1, smooth_window_s, name_order)",
           key));
     }
   }
@@ -140,6 +144,7 @@ json ToJson(const JobOptions& o) {
   if (o.detect_every) j["detect_every"] = *o.detect_every;
   if (o.fixed_k1) j["fixed_k1"] = *o.fixed_k1;
   if (o.smooth_window_s) j["smooth_window_s"] = *o.smooth_window_s;
+  if (o.name_order) j["name_order"] = *o.name_order;
   return j;
 }
 
@@ -153,6 +158,7 @@ MappingOptions ToMappingOptions(const JobOptions& o) {
   if (o.detect_every) m.detection_interval = *o.detect_every;
   if (o.fixed_k1 && *o.fixed_k1) m.submap.bundle_adjustment.refine_k1 = false;  // as --fixed-k1
   if (o.smooth_window_s) m.submap.centre_smoothing.half_window_s = *o.smooth_window_s;
+  if (o.name_order && *o.name_order) m.source.photos_by_capture_time = false;  // as --name-order
   m.Check();
   return m;
 }

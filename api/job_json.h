@@ -31,10 +31,13 @@ struct JobOptions {
   // Half width (seconds) of the camera-centre smoothing (`glam map --smooth-window`; 0 = the
   // per-frame PnP poses).
   std::optional<double> smooth_window_s;
+  // Photo jobs: map the photos in name order instead of their EXIF capture order (`glam map
+  // --name-order`).
+  std::optional<bool> name_order;
 };
 
 // Accepts an object with the keys name, stride, focal, intrinsics, keyframes_per_submap,
-// max_image_size, detect_every, fixed_k1, smooth_window_s (all optional). Throws InputError naming the key for unknown keys, wrong
+// max_image_size, detect_every, fixed_k1, smooth_window_s, name_order (all optional). Throws InputError naming the key for unknown keys, wrong
 // types or out-of-range values (the resulting MappingOptions are Check()ed as well).
 JobOptions ParseJobOptions(const nlohmann::json& j);
 // Parses text as JSON first (InputError "options: malformed JSON ...").

@@ -113,6 +113,10 @@ std::optional<ResumeCheckpoint> UsableCheckpoint(const std::filesystem::path& ou
     GLAM_LOG_WARN("cannot resume: {} was made at another processing size", kCheckpointFile);
     return std::nullopt;
   }
+  if (checkpoint->photos_reordered_by_time != report.photos_reordered_by_time) {
+    GLAM_LOG_WARN("cannot resume: {} was made with the photos in another order", kCheckpointFile);
+    return std::nullopt;
+  }
   for (std::uint32_t id = 0; id < checkpoint->next_submap_id; ++id) {
     if (!std::filesystem::exists(SubmapDirectory(out_dir / "submaps", id))) {
       GLAM_LOG_WARN("cannot resume: submap {} is missing", id);
@@ -146,6 +150,7 @@ ResumeCheckpoint MakeCheckpoint(const SubmapBuilder& builder, const std::vector<
   c.processing_width = report.processing_width;
   c.processing_height = report.processing_height;
   c.run_id = run_id;
+  c.photos_reordered_by_time = report.photos_reordered_by_time;
   return c;
 }
 

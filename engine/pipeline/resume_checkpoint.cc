@@ -20,7 +20,8 @@ void WriteCheckpoint(const std::filesystem::path& out_dir, const ResumeCheckpoin
                                {"k1_held", c.k1_held},
                                {"input", c.input},
                                {"processing_size", {c.processing_width, c.processing_height}},
-                               {"run_id", c.run_id}};
+                               {"run_id", c.run_id},
+                               {"photos_reordered_by_time", c.photos_reordered_by_time}};
   WriteFileAtomically(out_dir / kCheckpointFile, json.dump(2) + "\n");
 }
 
@@ -41,6 +42,7 @@ std::optional<ResumeCheckpoint> ReadCheckpoint(const std::filesystem::path& out_
     c.processing_width = json.at("processing_size").at(0).get<int>();
     c.processing_height = json.at("processing_size").at(1).get<int>();
     c.run_id = json.value("run_id", std::string());
+    c.photos_reordered_by_time = json.value("photos_reordered_by_time", std::int64_t{0});
     if (c.resume_frame < 0 || !(c.focal > 0)) throw InputError("values out of range");
     return c;
   } catch (const std::exception& e) {

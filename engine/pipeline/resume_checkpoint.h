@@ -31,6 +31,10 @@ struct ResumeCheckpoint {
   // The run's id (tile URIs carry it; see BuildTileset): a resumed run keeps it. Empty in
   // checkpoints written before it existed.
   std::string run_id;
+  // Photo folders: how many photos the EXIF capture order moved (MappingReport). Frame indices
+  // are places in that order, so a run whose order differs (--name-order now, or a checkpoint
+  // of a version that mapped photos in name order: absent = 0) cannot resume from it.
+  std::int64_t photos_reordered_by_time = 0;
 };
 
 inline constexpr char kCheckpointFile[] = "checkpoint.json";

@@ -45,6 +45,12 @@ TEST(JobJson, ParsesOptionsAndMapsThemToEngineOptions) {
   EXPECT_EQ(ToMappingOptions(JobOptions{}).submap.centre_smoothing.half_window_s,
             CentreSmoothingOptions{}.half_window_s);
   EXPECT_EQ(ToJson(smooth), json::parse(R"({"smooth_window_s": 0.0})"));
+  // name_order maps a photo job's photos in name order (as `glam map --name-order`).
+  const JobOptions named = ParseJobOptionsText(R"({"name_order": true})");
+  EXPECT_FALSE(ToMappingOptions(named).source.photos_by_capture_time);
+  EXPECT_TRUE(ToMappingOptions(ParseJobOptionsText(R"({"name_order": false})")).source.photos_by_capture_time);
+  EXPECT_TRUE(ToMappingOptions(JobOptions{}).source.photos_by_capture_time);
+  EXPECT_EQ(ToJson(named), json::parse(R"({"name_order": true})"));
   // Round trip through the stored JSON.
   const JobOptions back = ParseJobOptions(ToJson(o));
   EXPECT_EQ(ToJson(back), ToJson(o));
@@ -68,6 +74,7 @@ TEST(JobJson, RejectsBadOptionsWithTheKeyInTheMessage) {
   EXPECT_NE(message(R"({"detect_every": -1})").find("detect_every"), std::string::npos);
   EXPECT_NE(message(R"({"fixed_k1": "yes"})").find("fixed_k1"), std::string::npos);
   EXPECT_NE(message(R"({"fixed_k1": 1})").find("fixed_k1"), std::string::npos);
+  EXPECT_NE(message(R"({"name_order": "yes"})").find("name_order"), std::string::npos);
   EXPECT_NE(message(R"({"smooth_window_s": -0.1})").find("smooth_window_s"), std::string::npos);
   EXPECT_NE(message(R"({"smooth_window_s": 6})").find("smooth_window_s"), std::string::npos);
   EXPECT_NE(message(R"({"smooth_window_s": "0.5"})").find("smooth_window_s"), std::string::npos);

@@ -6,14 +6,17 @@
 #include <fstream>
 #include <limits>
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <opencv2/videoio.hpp>
 
 #include "engine/core/error.h"
 #include "engine/core/intrinsics_io.h"
 #include "engine/map/submap_io.h"
 #include "engine/pipeline/mapping_job.h"
 #include "engine/pipeline/resume_checkpoint.h"
+#include "tests/support/exif_photo.h"
 #include "tools/eval/evaluation.h"
 
 namespace glam {
@@ -113,6 +116,43 @@ TEST(ResumeMapping, WithoutACheckpointResumeStartsFromTheBeginning) {
   EXPECT_GE(report.submaps, 1);
   EXPECT_FALSE(fs::exists(out / "submaps" / "999999"));
   fs::remove_all(out);
+}
+
+// Frame indices of a photo folder are places in its (capture-time) order, so a checkpoint made
+// with the photos in one order must not be resumed with them in another (`--name-order` now, or
+// a checkpoint of a version that mapped photos in name order).
+TEST(ResumeMapping, APhotoFolderInAnotherOrderStartsFromTheBeginning) {
+  const fs::path dir = fs::temp_directory_path() / "glam_resume_test_photos";
+  fs::remove_all(dir);
+  fs::create_directories(dir / "photos");
+  cv::VideoCapture video((kClip / "video.mp4").string(), cv::CAP_FFMPEG);
+  ASSERT_TRUE(video.isOpened());
+  cv::Mat image;
+  int photos = 0;
+  for (int i = 0; video.read(image) && photos < 20; ++i) {
+    if (i % 6 != 0) continue;
+    // A counter that wrapped after the 5th photo: name order is not capture order.
+    glam::testing::WritePhoto(dir / "photos" / fmt::format("DJI_{:04}.JPG", (9995 + photos) % 10000), image, nullptr,
+                              fmt::format("2026:12:05 10:00:{:02}", 2 * photos));
+    ++photos;
+  }
+  MappingOptions options = DemoOptions();
+  options.intrinsics.reset();  // the photos are not downscaled like the video's intrinsics assume
+  options.submap.bundle_adjustment.refine_focal = true;
+  const MappingReport first = RunMapping(dir / "photos", dir / "out", options);
+  EXPECT_EQ(first.photos_reordered_by_time, photos);
+  ASSERT_TRUE(fs::exists(dir / "out" / kCheckpointFile));
+  EXPECT_EQ(ReadCheckpoint(dir / "out")->photos_reordered_by_time, photos);
+
+  options.resume = true;
+  options.source.photos_by_capture_time = false;
+  const MappingReport renamed = RunMapping(dir / "photos", dir / "out", options);
+  EXPECT_EQ(renamed.photos_reordered_by_time, 0);
+  EXPECT_EQ(renamed.resumed_from_frame, -1);  // started again
+  // Control: the same order resumes (here at the end of the photos: nothing left to map).
+  const MappingReport again = RunMapping(dir / "photos", dir / "out", options);
+  EXPECT_GE(again.resumed_from_frame, 0);
+  fs::remove_all(dir);
 }
 
 }  // namespace
