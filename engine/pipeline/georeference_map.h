@@ -13,12 +13,15 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
+#include <map>
 #include <memory>
 #include <vector>
 
 #include "engine/geo/georeference.h"
 #include "engine/geo/gps_track.h"
 #include "engine/map/map_snapshot.h"
+#include "engine/pipeline/map_export.h"
 
 namespace glam {
 
@@ -37,6 +40,15 @@ struct MapGeoreference {
   // null when the map's fit failed (the snapshot stays as it was).
   std::shared_ptr<const MapSnapshot> snapshot;
 };
+
+// Fits each part's camera centres (centres_of(part): by frame, in the part's own frame) to the
+// GPS track on its own; a part whose fit succeeds joins `enu` (a snapshot already in the map's
+// ENU frame: its submaps' placements become the fit times their place in the part, connected).
+// One entry per part; log: say what happened to each (the final revision, not every live one).
+std::vector<GpsPlacedPart> PlacePartsByGps(
+    const std::vector<PartModel>& parts,
+    const std::function<std::map<std::int64_t, Eigen::Vector3d>(const PartModel&)>& centres_of, double fps,
+    const std::vector<GpsSample>& gps, const GeoreferenceOptions& options, MapSnapshot* enu, bool log);
 
 // `submaps_root`: where the run's submaps are persisted (their frame poses give the camera
 // centres). fps: the video's frame rate (frame index / fps = the GPS track's time).

@@ -2,25 +2,23 @@
 
 #include <utility>
 
+#include "engine/alignment/world_leveling.h"
 #include "engine/core/logging.h"
 #include "engine/geo/geodetic.h"
 #include "engine/map/submap_io.h"
-#include "engine/pipeline/map_export.h"
+#include "engine/pipeline/georeference_map.h"
 
 namespace glam {
-namespace {
 
-// The part of a submap a fit needs: its id and frame poses.
-Submap PosesOnly(const Submap& submap) {
-  Submap poses;
-  poses.id = submap.id;
-  poses.first_frame = submap.first_frame;
-  poses.last_frame = submap.last_frame;
-  poses.frame_poses = submap.frame_poses;
-  return poses;
+LiveGeoreferencer::Cached LiveGeoreferencer::ForFits(const Submap& submap) {
+  LiveGeoreferencer::Cached entry;
+  entry.poses.id = submap.id;
+  entry.poses.first_frame = submap.first_frame;
+  entry.poses.last_frame = submap.last_frame;
+  entry.poses.frame_poses = submap.frame_poses;
+  entry.levelled_from_submap = LevelSubmap(submap).world_from_submap;
+  return entry;
 }
-
-}  // namespace
 
 LiveGeoreferencer::LiveGeoreferencer(std::vector<GpsSample> gps, double fps, GeoreferenceOptions options,
                                      std::filesystem::path submaps_root)
@@ -28,21 +26,23 @@ LiveGeoreferencer::LiveGeoreferencer(std::vector<GpsSample> gps, double fps, Geo
   options_.Check();
 }
 
-void LiveGeoreferencer::AddSubmap(const Submap& submap) { poses_[submap.id] = PosesOnly(submap); }
+void LiveGeoreferencer::AddSubmap(const Submap& submap) { cache_[submap.id] = ForFits(submap); }
 
-const Submap& LiveGeoreferencer::Poses(std::uint32_t id) {
-  auto it = poses_.find(id);
-  if (it == poses_.end()) it = poses_.emplace(id, PosesOnly(ReadSubmap(submaps_root_, id))).first;
+const LiveGeoreferencer::Cached& LiveGeoreferencer::Entry(std::uint32_t id) {
+  auto it = cache_.find(id);
+  if (it == cache_.end()) it = cache_.emplace(id, ForFits(ReadSubmap(submaps_root_, id))).first;
   return it->second;
+}
+
+std::map<std::int64_t, Eigen::Vector3d> LiveGeoreferencer::Centres(const std::vector<PlacedSubmap>& placed) {
+  ChosenPoses poses;
+  for (const PlacedSubmap& entry : placed) AddFramePoses(Entry(entry.id).poses, entry.frame_from_submap, &poses);
+  return CameraCentres(poses);
 }
 
 std::shared_ptr<const MapSnapshot> LiveGeoreferencer::Apply(const std::shared_ptr<const MapSnapshot>& snapshot) {
   if (gps_.empty() || snapshot == nullptr) return snapshot;
-  ChosenPoses poses;
-  for (const PlacedSubmap& placed : MapSubmaps(*snapshot)) {
-    AddFramePoses(Poses(placed.id), placed.frame_from_submap, &poses);
-  }
-  GeoreferenceResult refit = FitGeoreference(CameraCentres(poses), fps_, gps_, options_);
+  GeoreferenceResult refit = FitGeoreference(Centres(MapSubmaps(*snapshot)), fps_, gps_, options_);
   if (refit.ok) {
     if (!fit_) {
       GLAM_LOG_INFO("map revision {} georeferenced while mapping: {} GPS positions, rms {:.2f} m over {:.0f} m",
@@ -59,6 +59,13 @@ std::shared_ptr<const MapSnapshot> LiveGeoreferencer::Apply(const std::shared_pt
     placement.world_from_submap = fit_->enu_from_world * placement.world_from_submap;
   }
   georeferenced->ecef_from_world = EnuFrame(fit_->origin).EcefFromEnu();
+  const std::vector<PartModel> parts =
+      DisconnectedParts(*snapshot, [this](std::uint32_t first, const Sim3& part_from_first) {
+        return Entry(first).levelled_from_submap * part_from_first.Inverse();
+      });
+  PlacePartsByGps(
+      parts, [this](const PartModel& part) { return Centres(part.submaps); }, fps_, gps_, options_,
+      georeferenced.get(), false);
   return georeferenced;
 }
 

@@ -15,8 +15,11 @@
 // A revision keeps its number: it is the same alignment state, expressed in ENU. Once a
 // revision has been georeferenced, later ones stay in ENU: if a refit fails (e.g. GPS outliers
 // dominate a short stretch) the last good fit is reused rather than switching the viewer back to
-// the mapping frame. The final revision's fit (GeoreferenceMap) is computed afresh on the whole
-// map and also places the disconnected parts.
+// the mapping frame. Disconnected parts (pieces of the flight the images could not link) are
+// placed by their own fits as the final revision places them (PlacePartsByGps), so the live
+// view shows a flight with a cut in one piece too; for that the levelling of each submap's frame
+// is kept as well (the frame a part is fitted in, as GeoreferenceMap levels it). The final
+// revision's fits (GeoreferenceMap) are computed afresh on the whole map.
 #pragma once
 
 #include <cstdint>
@@ -30,6 +33,7 @@
 #include "engine/geo/gps_track.h"
 #include "engine/map/map_snapshot.h"
 #include "engine/map/submap.h"
+#include "engine/pipeline/map_export.h"
 
 namespace glam {
 
@@ -40,25 +44,35 @@ class LiveGeoreferencer {
   LiveGeoreferencer(std::vector<GpsSample> gps, double fps, GeoreferenceOptions options,
                     std::filesystem::path submaps_root);
 
-  // Keeps the completed submap's frame poses (nothing else) for later fits.
+  // Keeps the completed submap's frame poses and the levelling of its frame (nothing else) for
+  // later fits.
   void AddSubmap(const Submap& submap);
 
   // The snapshot in metres, east-north-up (same revision, every placement composed with the
-  // fit, ecef_from_world set), or the snapshot itself while no fit has succeeded yet.
+  // fit, each part with a fit of its own placed and connected, ecef_from_world set), or the
+  // snapshot itself while no fit has succeeded yet.
   std::shared_ptr<const MapSnapshot> Apply(const std::shared_ptr<const MapSnapshot>& snapshot);
 
   // The fit the last georeferenced revision used (nullopt: none yet).
   const std::optional<GeoreferenceResult>& fit() const { return fit_; }
 
  private:
-  // The cached poses-only copy of submap `id`, read from disk on first use if needed.
-  const Submap& Poses(std::uint32_t id);
+  struct Cached {
+    Submap poses;  // id, frame range and frame poses only
+    Sim3 levelled_from_submap;  // LevelSubmap: the frame a part starting with it is fitted in
+  };
+  // What a fit needs of a completed submap.
+  static Cached ForFits(const Submap& submap);
+  // The cache entry of submap `id`, read from disk on first use if needed.
+  const Cached& Entry(std::uint32_t id);
+  // Frame -> camera centre of the placed submaps, by the rule of AddFramePoses.
+  std::map<std::int64_t, Eigen::Vector3d> Centres(const std::vector<PlacedSubmap>& placed);
 
   std::vector<GpsSample> gps_;
   double fps_;
   GeoreferenceOptions options_;
   std::filesystem::path submaps_root_;
-  std::map<std::uint32_t, Submap> poses_;  // submap id -> frame poses only
+  std::map<std::uint32_t, Cached> cache_;  // by submap id
   std::optional<GeoreferenceResult> fit_;
 };
 

@@ -94,6 +94,12 @@ std::map<std::int64_t, Eigen::Vector3d> WorldCameraCentres(const MapSnapshot& sn
 }
 
 std::vector<PartModel> DisconnectedParts(const MapSnapshot& snapshot, const fs::path& submaps_root) {
+  return DisconnectedParts(snapshot, [&submaps_root](std::uint32_t first, const Sim3& part_from_first) {
+    return LevelPart(ReadSubmap(submaps_root, first), part_from_first);
+  });
+}
+
+std::vector<PartModel> DisconnectedParts(const MapSnapshot& snapshot, const PartLeveling& level) {
   std::map<int, std::vector<const SubmapPlacement*>> members_of;  // part -> submaps, ids ascending
   std::vector<const SubmapPlacement*> sorted;
   for (const SubmapPlacement& placement : snapshot.submaps) sorted.push_back(&placement);
@@ -107,8 +113,7 @@ std::vector<PartModel> DisconnectedParts(const MapSnapshot& snapshot, const fs::
     PartModel part;
     part.first_frame = members.front()->first_frame;
     // The part's frame: its first submap levelled, like the world frame of the map.
-    const Sim3 levelled_from_part =
-        LevelPart(ReadSubmap(submaps_root, members.front()->id), members.front()->part_from_submap);
+    const Sim3 levelled_from_part = level(members.front()->id, members.front()->part_from_submap);
     for (const SubmapPlacement* p : members) {
       part.submaps.push_back({p->id, levelled_from_part * p->part_from_submap});
       part.first_frame = std::min(part.first_frame, p->first_frame);

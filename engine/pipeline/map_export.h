@@ -16,6 +16,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <utility>
 #include <vector>
@@ -58,6 +59,10 @@ struct PartModel {
 
 // The snapshot's disconnected parts in order of their first frame (the numbering of parts/<n>).
 std::vector<PartModel> DisconnectedParts(const MapSnapshot& snapshot, const std::filesystem::path& submaps_root);
+// The same with the levelling of each part's frame given: level(first submap id,
+// part_from_first) -> levelled_from_part (LevelPart on the submap read from disk, above).
+using PartLeveling = std::function<Sim3(std::uint32_t, const Sim3&)>;
+std::vector<PartModel> DisconnectedParts(const MapSnapshot& snapshot, const PartLeveling& level);
 
 // The map's (connected) submaps of a snapshot, ids ascending, placed in the world frame.
 std::vector<PlacedSubmap> MapSubmaps(const MapSnapshot& snapshot);

@@ -108,6 +108,33 @@ TEST(GeoreferenceEndToEnd, AVideoWithItsSrtIsMappedInMetresEastNorthUp) {
   EXPECT_FALSE(fs::exists(dir / "plain" / "trajectory.geojson"));
 }
 
+// The camera poses a tileset.json written during a run shows: its connected submaps' frame
+// poses (read from out/submaps) placed by their transforms, t = frame / 30.
+std::vector<TimedPose> RevisionTrajectory(const fs::path& out, const nlohmann::json& tileset) {
+  ChosenPoses poses;
+  for (const nlohmann::json& child : tileset["root"]["children"]) {
+    if (child["extras"]["disconnected"].get<bool>()) continue;
+    Eigen::Matrix4d world_from_submap;
+    for (int k = 0; k < 16; ++k) world_from_submap(k % 4, k / 4) = child["transform"][k].get<double>();
+    AddFramePoses(ReadSubmap(out / "submaps", child["extras"]["submap"].get<std::uint32_t>()),
+                  Sim3::FromMatrix(world_from_submap), &poses);
+  }
+  std::vector<TimedPose> mapped;
+  for (const auto& [index, pose] : poses) mapped.push_back({static_cast<double>(index) / 30, pose.first});
+  return mapped;
+}
+
+// Runs `video` to `out` and returns every tileset.json written while mapping, by revision.
+std::map<std::int64_t, nlohmann::json> LiveTilesets(const fs::path& video, const fs::path& out,
+                                                   const MappingOptions& options, MappingReport* report) {
+  std::map<std::int64_t, nlohmann::json> live;
+  *report = RunMapping(video, out, options, [&](const MappingProgress& p) {
+    if (p.stage != "mapping" || p.revision == 0 || live.count(p.revision) > 0) return;
+    live[p.revision] = nlohmann::json::parse(std::ifstream(out / "tileset.json"));
+  });
+  return live;
+}
+
 // The map is in metres, east-north-up while it is built, not only at the end: every tileset.json
 // written during the run after the first successful GPS fit has the root transform, and its
 // submap placements put the camera centres where the drone was. Before, the live view stayed in
@@ -120,12 +147,9 @@ TEST(GeoreferenceEndToEnd, RevisionsWrittenWhileMappingAreAlreadyInMetresEastNor
 
   MappingOptions options;
   options.submap.keyframes_per_submap = 6;  // several submaps, so several revisions mid-run
-  std::map<std::int64_t, nlohmann::json> live_tilesets;  // revision -> tileset.json while mapping
   const fs::path out = dir / "out";
-  const MappingReport report = RunMapping(dir / "DJI_0002.MP4", out, options, [&](const MappingProgress& p) {
-    if (p.stage != "mapping" || p.revision == 0 || live_tilesets.count(p.revision) > 0) return;
-    live_tilesets[p.revision] = nlohmann::json::parse(std::ifstream(out / "tileset.json"));
-  });
+  MappingReport report;
+  const std::map<std::int64_t, nlohmann::json> live_tilesets = LiveTilesets(dir / "DJI_0002.MP4", out, options, &report);
   ASSERT_TRUE(report.georeference.ok) << report.georeference.reason;
   ASSERT_GE(report.submaps, 3);
   ASSERT_GE(live_tilesets.size(), 2u);
@@ -142,17 +166,7 @@ TEST(GeoreferenceEndToEnd, RevisionsWrittenWhileMappingAreAlreadyInMetresEastNor
       continue;
     }
     ++georeferenced;
-    // The camera centres of the revision's connected submaps, placed by its transforms.
-    ChosenPoses poses;
-    for (const nlohmann::json& child : tileset["root"]["children"]) {
-      if (child["extras"]["disconnected"].get<bool>()) continue;
-      Eigen::Matrix4d world_from_submap;
-      for (int k = 0; k < 16; ++k) world_from_submap(k % 4, k / 4) = child["transform"][k].get<double>();
-      AddFramePoses(ReadSubmap(out / "submaps", child["extras"]["submap"].get<std::uint32_t>()),
-                    Sim3::FromMatrix(world_from_submap), &poses);
-    }
-    std::vector<TimedPose> mapped;
-    for (const auto& [index, pose] : poses) mapped.push_back({static_cast<double>(index) / 30, pose.first});
+    const std::vector<TimedPose> mapped = RevisionTrajectory(out, tileset);
     std::size_t count = 0;
     const double rms = glam::testing::UnalignedCentreRms(mapped, truth, shift, frame_of, &count);
     std::cout << fmt::format("live revision {}: {} frames posed in ENU, rms {:.3f} m\n", revision, count, rms);
@@ -173,14 +187,16 @@ TEST(GeoreferenceEndToEnd, RevisionsWrittenWhileMappingAreAlreadyInMetresEastNor
 // second is written to parts/1 in its own frame), with one GPS track over both. Each piece is
 // fitted to the GPS on its own, into the same east-north-up frame: the whole flight comes out
 // as one map, each piece where it truly was.
-TEST(GeoreferenceEndToEnd, APieceTheImagesCannotLinkIsPlacedInTheMapByGps) {
-  const fs::path dir = glam::testing::FreshTempDir("georeference_pieces");
+// dir/two_pieces.mp4 (the lawnmower clip, a hard cut, then the seed-4 lawnmower flown 150 m
+// east and 80 m north) with one GPS track over both, two_pieces.SRT; returns the truth of the
+// whole flight.
+std::vector<TimedPose> MakeTwoPieces(const fs::path& dir) {
   const fs::path clip_b = fs::path(GLAM_TEST_FIXTURES_DIR) / "lawnmower_seed4";
   const std::string command = "ffmpeg -nostdin -v error -y -i '" + (kClip / "video.mp4").string() + "' -i '" +
                               (clip_b / "video.mp4").string() +
                               "' -filter_complex '[0:v][1:v]concat=n=2:v=1[v]' -map '[v]' -c:v libx264 -crf 16 '" +
                               (dir / "two_pieces.mp4").string() + "'";
-  ASSERT_EQ(std::system(command.c_str()), 0) << command;
+  EXPECT_EQ(std::system(command.c_str()), 0) << command;
   const std::vector<TimedPose> truth_a = ReadTumTrajectory(kClip / "gt_trajectory.tum");
   std::vector<TimedPose> truth_b = ReadTumTrajectory(clip_b / "gt_trajectory.tum");
   // The second piece was flown 150 m east and 80 m north of its synthetic world's origin.
@@ -192,6 +208,22 @@ TEST(GeoreferenceEndToEnd, APieceTheImagesCannotLinkIsPlacedInTheMapByGps) {
     truth.push_back({p.timestamp + b_start, p.world_from_cam});
   }
   std::ofstream(dir / "two_pieces.SRT") << synth::DjiSrtFromTrajectory(truth, 1.0, 9);
+  return truth;
+}
+
+// Which piece a mapped pose of the two-piece flight shows (its truth index), or nullopt.
+std::function<std::optional<std::size_t>(double)> Piece(std::size_t cut, bool second) {
+  return [cut, second](double t) -> std::optional<std::size_t> {
+    const auto index = static_cast<std::size_t>(std::llround(t * 30));
+    if ((index >= cut) != second) return std::nullopt;
+    return index;
+  };
+}
+
+TEST(GeoreferenceEndToEnd, APieceTheImagesCannotLinkIsPlacedInTheMapByGps) {
+  const fs::path dir = glam::testing::FreshTempDir("georeference_pieces");
+  const std::vector<TimedPose> truth = MakeTwoPieces(dir);
+  const std::vector<TimedPose> truth_a = ReadTumTrajectory(kClip / "gt_trajectory.tum");
 
   const MappingReport report = RunMapping(dir / "two_pieces.mp4", dir / "out", MappingOptions{});
   ASSERT_TRUE(report.georeference.ok) << report.georeference.reason;
@@ -209,16 +241,9 @@ TEST(GeoreferenceEndToEnd, APieceTheImagesCannotLinkIsPlacedInTheMapByGps) {
   const std::vector<TimedPose> mapped = ReadTumTrajectory(dir / "out" / "trajectory.tum");
   const Eigen::Vector3d shift = truth_a.front().world_from_cam.translation();
   const std::size_t cut = truth_a.size();
-  const auto piece = [cut](bool second) {
-    return [cut, second](double t) -> std::optional<std::size_t> {
-      const auto index = static_cast<std::size_t>(std::llround(t * 30));
-      if ((index >= cut) != second) return std::nullopt;
-      return index;
-    };
-  };
   std::size_t count_a = 0, count_b = 0;
-  const double rms_a = glam::testing::UnalignedCentreRms(mapped, truth, shift, piece(false), &count_a);
-  const double rms_b = glam::testing::UnalignedCentreRms(mapped, truth, shift, piece(true), &count_b);
+  const double rms_a = glam::testing::UnalignedCentreRms(mapped, truth, shift, Piece(cut, false), &count_a);
+  const double rms_b = glam::testing::UnalignedCentreRms(mapped, truth, shift, Piece(cut, true), &count_b);
   std::cout << fmt::format("two pieces: first {:.3f} m rms over {} frames, second (placed by GPS) {:.3f} m over {} "
                            "frames; fits {:.2f} / {:.2f} m\n",
                            rms_a, count_a, rms_b, count_b, report.georeference.rms_m, part.fit.rms_m);
@@ -233,6 +258,36 @@ TEST(GeoreferenceEndToEnd, APieceTheImagesCannotLinkIsPlacedInTheMapByGps) {
   ASSERT_EQ(j["georeference"]["parts"].size(), 1u);
   EXPECT_EQ(j["georeference"]["parts"][0]["ok"], true);
   EXPECT_EQ(j["parts"].size(), 0u);
+}
+
+// While mapping too: once the second piece's first submap is complete and its frames span enough
+// GPS track, the live revisions place it by its own fit instead of showing it disconnected.
+TEST(GeoreferenceEndToEnd, WhileMappingAPieceTheImagesCannotLinkIsPlacedByGpsToo) {
+  const fs::path dir = glam::testing::FreshTempDir("georeference_pieces_live");
+  const std::vector<TimedPose> truth = MakeTwoPieces(dir);
+  const std::size_t cut = ReadTumTrajectory(kClip / "gt_trajectory.tum").size();
+  MappingOptions options;
+  options.submap.keyframes_per_submap = 6;  // the second piece completes submaps mid-run
+  MappingReport report;
+  const std::map<std::int64_t, nlohmann::json> live = LiveTilesets(dir / "two_pieces.mp4", dir / "out", options, &report);
+  ASSERT_TRUE(report.georeference.ok) << report.georeference.reason;
+  const Eigen::Vector3d shift = truth.front().world_from_cam.translation();
+  int placed = 0;
+  for (const auto& [revision, tileset] : live) {
+    bool has_second_piece = false;
+    for (const nlohmann::json& child : tileset["root"]["children"]) {
+      has_second_piece |= child["extras"]["first_frame"].get<std::int64_t>() >= static_cast<std::int64_t>(cut);
+    }
+    if (!has_second_piece || !tileset["root"].contains("transform")) continue;
+    std::size_t count = 0;
+    const double rms = glam::testing::UnalignedCentreRms(RevisionTrajectory(dir / "out", tileset), truth, shift,
+                                                         Piece(cut, true), &count);
+    std::cout << fmt::format("live revision {}: second piece {} frames placed, rms {:.3f} m\n", revision, count, rms);
+    if (count == 0) continue;  // still disconnected (too little of it for a fit)
+    ++placed;
+    EXPECT_LT(rms, 1.5) << "revision " << revision;
+  }
+  EXPECT_GE(placed, 1);
 }
 
 TEST(GeoreferenceEndToEnd, AnUnusableSidecarWarnsAndAGivenOneMustParse) {

@@ -111,14 +111,43 @@ TEST(LiveGeoreferencer, PutsRevisionsInEnuOnceTheTrackAllowsAFitAndKeepsTheFitAf
   EXPECT_FALSE(second->ecef_from_world.has_value());
   EXPECT_GT(WorstCentreError(*second, {&s0, &s1}), 10.0);
 
-  // A revision whose refit fails (here: nothing connected) keeps the last fit.
+  // A revision whose refit fails (here: a map of 4 frames over 3 m) keeps the last fit.
+  const Submap tiny = PosedSubmap(2, 20, 23, world_from_s0);
+  live.AddSubmap(tiny);
   auto third = std::make_shared<MapSnapshot>();
   third->revision = 3;
-  third->submaps = {Placement(s0, world_from_s0, true), Placement(s1, world_from_s1, true)};
+  third->submaps = {Placement(tiny, world_from_s0)};
   const std::shared_ptr<const MapSnapshot> kept = live.Apply(third);
   EXPECT_EQ(kept->revision, 3);
   ASSERT_TRUE(kept->ecef_from_world.has_value());
-  EXPECT_LT(WorstCentreError(*kept, {&s0, &s1}), 1e-3);
+  EXPECT_LT(WorstCentreError(*kept, {&tiny}), 1e-3);
+}
+
+// A part the images could not link to the map (its placement in the snapshot only a guess) is
+// placed by a GPS fit of its own, as the final revision places it, and shown connected.
+TEST(LiveGeoreferencer, PlacesADisconnectedPartByItsOwnFit) {
+  const std::filesystem::path root = glam::testing::FreshTempDir("live_georeference_part") / "submaps";
+  // The part (frames 80-99: 20 m north) is a straight line, so its fit is yaw, scale and offset
+  // in its levelled frame; a submap without landmarks levels to its own frame, so that frame is
+  // made level here (the map's, frames 0-79 over both directions, gets the full fit).
+  const Sim3 enu_from_s1(1.7, SO3::Exp(Eigen::Vector3d(0, 0, 0.7)), Eigen::Vector3d(5, 3, 0));
+  const Sim3 world_from_s1 = kWorldFromEnu * enu_from_s1;
+  const Submap s0 = PosedSubmap(0, 0, 79, Sim3());
+  const Submap s1 = PosedSubmap(1, 80, 99, world_from_s1);
+  LiveGeoreferencer live(GpsTrack(100), kFps, GeoreferenceOptions{}, root);
+  live.AddSubmap(s0);
+  live.AddSubmap(s1);
+  auto snapshot = std::make_shared<MapSnapshot>();
+  snapshot->revision = 4;
+  // s1 is a part of its own: its guessed world placement is wrong, its part frame is itself.
+  snapshot->submaps = {Placement(s0, Sim3()), Placement(s1, Sim3(), true)};
+  snapshot->submaps[1].part_from_submap = Sim3();
+  const std::shared_ptr<const MapSnapshot> enu = live.Apply(snapshot);
+  ASSERT_TRUE(live.fit().has_value());
+  EXPECT_FALSE(enu->submaps[1].disconnected);
+  EXPECT_EQ(enu->submaps[1].part, 0);
+  EXPECT_LT(WorstCentreError(*enu, {&s0, &s1}), 1e-3);
+  EXPECT_TRUE(snapshot->submaps[1].disconnected);  // the input is untouched
 }
 
 TEST(LiveGeoreferencer, ReadsSubmapsItWasNotGivenFromDisk) {
