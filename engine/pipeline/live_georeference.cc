@@ -9,16 +9,19 @@
 #include "engine/pipeline/georeference_map.h"
 
 namespace glam {
+namespace {
 
-LiveGeoreferencer::Cached LiveGeoreferencer::ForFits(const Submap& submap) {
-  LiveGeoreferencer::Cached entry;
-  entry.poses.id = submap.id;
-  entry.poses.first_frame = submap.first_frame;
-  entry.poses.last_frame = submap.last_frame;
-  entry.poses.frame_poses = submap.frame_poses;
-  entry.levelled_from_submap = LevelSubmap(submap).world_from_submap;
-  return entry;
+// The part of a submap a fit needs: its id, frame range and frame poses.
+Submap PosesOnly(const Submap& submap) {
+  Submap poses;
+  poses.id = submap.id;
+  poses.first_frame = submap.first_frame;
+  poses.last_frame = submap.last_frame;
+  poses.frame_poses = submap.frame_poses;
+  return poses;
 }
+
+}  // namespace
 
 LiveGeoreferencer::LiveGeoreferencer(std::vector<GpsSample> gps, double fps, GeoreferenceOptions options,
                                      std::filesystem::path submaps_root)
@@ -26,17 +29,25 @@ LiveGeoreferencer::LiveGeoreferencer(std::vector<GpsSample> gps, double fps, Geo
   options_.Check();
 }
 
-void LiveGeoreferencer::AddSubmap(const Submap& submap) { cache_[submap.id] = ForFits(submap); }
+void LiveGeoreferencer::AddSubmap(const Submap& submap) { poses_[submap.id] = PosesOnly(submap); }
 
-const LiveGeoreferencer::Cached& LiveGeoreferencer::Entry(std::uint32_t id) {
-  auto it = cache_.find(id);
-  if (it == cache_.end()) it = cache_.emplace(id, ForFits(ReadSubmap(submaps_root_, id))).first;
+const Submap& LiveGeoreferencer::Poses(std::uint32_t id) {
+  auto it = poses_.find(id);
+  if (it == poses_.end()) it = poses_.emplace(id, PosesOnly(ReadSubmap(submaps_root_, id))).first;
+  return it->second;
+}
+
+const Sim3& LiveGeoreferencer::LevelledFromSubmap(std::uint32_t id) {
+  auto it = levelled_from_submap_.find(id);
+  if (it == levelled_from_submap_.end()) {
+    it = levelled_from_submap_.emplace(id, LevelSubmap(ReadSubmap(submaps_root_, id)).world_from_submap).first;
+  }
   return it->second;
 }
 
 std::map<std::int64_t, Eigen::Vector3d> LiveGeoreferencer::Centres(const std::vector<PlacedSubmap>& placed) {
   ChosenPoses poses;
-  for (const PlacedSubmap& entry : placed) AddFramePoses(Entry(entry.id).poses, entry.frame_from_submap, &poses);
+  for (const PlacedSubmap& entry : placed) AddFramePoses(Poses(entry.id), entry.frame_from_submap, &poses);
   return CameraCentres(poses);
 }
 
@@ -61,7 +72,7 @@ std::shared_ptr<const MapSnapshot> LiveGeoreferencer::Apply(const std::shared_pt
   georeferenced->ecef_from_world = EnuFrame(fit_->origin).EcefFromEnu();
   const std::vector<PartModel> parts =
       DisconnectedParts(*snapshot, [this](std::uint32_t first, const Sim3& part_from_first) {
-        return Entry(first).levelled_from_submap * part_from_first.Inverse();
+        return LevelledFromSubmap(first) * part_from_first.Inverse();
       });
   PlacePartsByGps(
       parts, [this](const PartModel& part) { return Centres(part.submaps); }, fps_, gps_, options_,

@@ -17,8 +17,9 @@
 // dominate a short stretch) the last good fit is reused rather than switching the viewer back to
 // the mapping frame. Disconnected parts (pieces of the flight the images could not link) are
 // placed by their own fits as the final revision places them (PlacePartsByGps), so the live
-// view shows a flight with a cut in one piece too; for that the levelling of each submap's frame
-// is kept as well (the frame a part is fitted in, as GeoreferenceMap levels it). The final
+// view shows a flight with a cut in one piece too; a part is fitted in its first submap's
+// levelled frame (as GeoreferenceMap levels it), which needs that submap's landmarks: it is read
+// from disk once when it first starts a part (rare), not levelled for every submap. The final
 // revision's fits (GeoreferenceMap) are computed afresh on the whole map.
 #pragma once
 
@@ -44,8 +45,8 @@ class LiveGeoreferencer {
   LiveGeoreferencer(std::vector<GpsSample> gps, double fps, GeoreferenceOptions options,
                     std::filesystem::path submaps_root);
 
-  // Keeps the completed submap's frame poses and the levelling of its frame (nothing else) for
-  // later fits.
+  // Keeps the completed submap's frame poses (nothing else) for later fits. The submap must be
+  // persisted under submaps_root already (a part starting with it is levelled from the file).
   void AddSubmap(const Submap& submap);
 
   // The snapshot in metres, east-north-up (same revision, every placement composed with the
@@ -57,14 +58,10 @@ class LiveGeoreferencer {
   const std::optional<GeoreferenceResult>& fit() const { return fit_; }
 
  private:
-  struct Cached {
-    Submap poses;  // id, frame range and frame poses only
-    Sim3 levelled_from_submap;  // LevelSubmap: the frame a part starting with it is fitted in
-  };
-  // What a fit needs of a completed submap.
-  static Cached ForFits(const Submap& submap);
-  // The cache entry of submap `id`, read from disk on first use if needed.
-  const Cached& Entry(std::uint32_t id);
+  // The cached poses-only copy of submap `id`, read from disk on first use if needed.
+  const Submap& Poses(std::uint32_t id);
+  // LevelSubmap of submap `id` (read from disk, once): the frame of a part starting with it.
+  const Sim3& LevelledFromSubmap(std::uint32_t id);
   // Frame -> camera centre of the placed submaps, by the rule of AddFramePoses.
   std::map<std::int64_t, Eigen::Vector3d> Centres(const std::vector<PlacedSubmap>& placed);
 
@@ -72,7 +69,8 @@ class LiveGeoreferencer {
   double fps_;
   GeoreferenceOptions options_;
   std::filesystem::path submaps_root_;
-  std::map<std::uint32_t, Cached> cache_;  // by submap id
+  std::map<std::uint32_t, Submap> poses_;  // submap id -> frame poses only
+  std::map<std::uint32_t, Sim3> levelled_from_submap_;  // submaps that started a part
   std::optional<GeoreferenceResult> fit_;
 };
 

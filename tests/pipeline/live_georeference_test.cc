@@ -129,11 +129,13 @@ TEST(LiveGeoreferencer, PlacesADisconnectedPartByItsOwnFit) {
   const std::filesystem::path root = glam::testing::FreshTempDir("live_georeference_part") / "submaps";
   // The part (frames 80-99: 20 m north) is a straight line, so its fit is yaw, scale and offset
   // in its levelled frame; a submap without landmarks levels to its own frame, so that frame is
-  // made level here (the map's, frames 0-79 over both directions, gets the full fit).
+  // made level here (the map's, frames 0-79 over both directions, gets the full fit). The part's
+  // first submap is levelled from its file, as in a run (submaps are persisted before alignment).
   const Sim3 enu_from_s1(1.7, SO3::Exp(Eigen::Vector3d(0, 0, 0.7)), Eigen::Vector3d(5, 3, 0));
   const Sim3 world_from_s1 = kWorldFromEnu * enu_from_s1;
   const Submap s0 = PosedSubmap(0, 0, 79, Sim3());
   const Submap s1 = PosedSubmap(1, 80, 99, world_from_s1);
+  WriteSubmap(s1, root);
   LiveGeoreferencer live(GpsTrack(100), kFps, GeoreferenceOptions{}, root);
   live.AddSubmap(s0);
   live.AddSubmap(s1);
