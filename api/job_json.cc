@@ -12,6 +12,11 @@ namespace {
 
 using nlohmann::json;
 
+// Bounds of options.max_features: fewer than ~100 features cannot track a frame; more than
+// 50,000 per frame would only spend memory and time (8000 is the photo-job default).
+constexpr int kMinMaxFeatures = 100;
+constexpr int kMaxMaxFeatures = 50000;
+
 int GetInt(const json& j, const char* key) {
   if (!j.is_number_integer()) {
     throw InputError(fmt::format("options.{} must be an integer, got {}", key, j.dump()));
@@ -101,6 +106,14 @@ JobOptions ParseJobOptions(const json& j) {
       o.fixed_k1 = GetBool(value, "fixed_k1");
     } else if (key == "name_order") {
       o.name_order = GetBool(value, "name_order");
+    } else if (key == "refine_focal") {
+      o.refine_focal = GetBool(value, "refine_focal");
+    } else if (key == "max_features") {
+      o.max_features = GetInt(value, "max_features");
+      if (*o.max_features < kMinMaxFeatures || *o.max_features > kMaxMaxFeatures) {
+        throw InputError(fmt::format("options.max_features must be in [{}, {}], got {}", kMinMaxFeatures,
+                                     kMaxMaxFeatures, *o.max_features));
+      }
     } else if (key == "smooth_window_s") {
       o.smooth_window_s = GetNumber(value, "smooth_window_s");
       if (!(*o.smooth_window_s >= 0 && *o.smooth_window_s <= 5)) {
@@ -110,7 +123,8 @@ JobOptions ParseJobOptions(const json& j) {
     } else {
       throw InputError(fmt::format(
           "options: unknown key \"{}\" (known: name, stride, focal, intrinsics, "
-          "keyframes_per_submap, max_image_size, detect_every, fixed_k1, smooth_window_s, name_order)",
+          "keyframes_per_submap, max_image_size, detect_every, fixed_k1, smooth_window_s, name_order, "
+          "refine_focal, max_features)",
           key));
     }
   }
@@ -145,6 +159,8 @@ json ToJson(const JobOptions& o) {
   if (o.fixed_k1) j["fixed_k1"] = *o.fixed_k1;
   if (o.smooth_window_s) j["smooth_window_s"] = *o.smooth_window_s;
   if (o.name_order) j["name_order"] = *o.name_order;
+  if (o.refine_focal) j["refine_focal"] = *o.refine_focal;
+  if (o.max_features) j["max_features"] = *o.max_features;
   return j;
 }
 
@@ -153,6 +169,8 @@ MappingOptions ToMappingOptions(const JobOptions& o) {
   if (o.stride) m.source.stride = *o.stride;
   if (o.max_image_size) m.source.max_image_size = *o.max_image_size;
   if (o.intrinsics) UseCalibration(&m, *o.intrinsics);  // as `glam map --intrinsics`
+  if (o.refine_focal && *o.refine_focal) m.submap.bundle_adjustment.refine_focal = true;  // --refine-focal
+  if (o.max_features) m.sift.max_features = *o.max_features;
   if (o.focal) m.focal_px = *o.focal;
   if (o.keyframes_per_submap) m.submap.keyframes_per_submap = *o.keyframes_per_submap;
   if (o.detect_every) m.detection_interval = *o.detect_every;

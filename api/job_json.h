@@ -34,10 +34,18 @@ struct JobOptions {
   // Photo jobs: map the photos in name order instead of their EXIF capture order (`glam map
   // --name-order`).
   std::optional<bool> name_order;
+  // With `intrinsics`: refine their focal length in bundle adjustment instead of keeping it
+  // fixed (`glam map --refine-focal`; for a focal from EXIF or a data sheet). Without
+  // intrinsics the focal is always estimated, so the option changes nothing there.
+  std::optional<bool> refine_focal;
+  // SIFT features per frame (`glam map --max-features`); default 2000 for videos, 8000 for
+  // photo jobs (kPhotoFolderMaxFeatures).
+  std::optional<int> max_features;
 };
 
 // Accepts an object with the keys name, stride, focal, intrinsics, keyframes_per_submap,
-// max_image_size, detect_every, fixed_k1, smooth_window_s, name_order (all optional). Throws
+// max_image_size, detect_every, fixed_k1, smooth_window_s, name_order, refine_focal,
+// max_features (all optional). Throws
 // InputError naming the key for unknown keys, wrong types or out-of-range values (the
 // resulting MappingOptions are Check()ed as well).
 JobOptions ParseJobOptions(const nlohmann::json& j);

@@ -455,15 +455,20 @@ void JobService::RunJob(const std::string& id, const CancellationToken& cancel) 
     job.progress.stage = "starting";
     job.warnings.clear();
     job.parts = nlohmann::json::array();
+    bool max_features_given = false;
     try {
-      mapping_options = ToMappingOptions(ParseJobOptions(job.options));
+      const JobOptions job_options = ParseJobOptions(job.options);
+      max_features_given = job_options.max_features.has_value();
+      mapping_options = ToMappingOptions(job_options);
     } catch (const std::exception& e) {
       SetStateLocked(job, JobState::kFailed, fmt::format("invalid job options: {}", e.what()));
       live_.erase(id);
       return;
     }
     mapping_options.resume = job.resume;
-    if (job.input_file == kImagesFolder) mapping_options.sift.max_features = kPhotoFolderMaxFeatures;
+    if (job.input_file == kImagesFolder && !max_features_given) {
+      mapping_options.sift.max_features = kPhotoFolderMaxFeatures;
+    }
     SetStateLocked(job, JobState::kRunning, std::nullopt, job.resume ? "resuming" : "");
   }
   GLAM_LOG_INFO("job {}: mapping started{}", id, job.resume ? " (resume)" : "");

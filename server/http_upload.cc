@@ -178,13 +178,13 @@ api::JobOptions RawBodyOptions(const httplib::Request& req) {
     if (key == "token" || key == "filename") continue;
     if (key == "name") {
       j[key] = value;
-    } else if (key == "fixed_k1") {
+    } else if (key == "fixed_k1" || key == "refine_focal") {
       if (value == "true" || value == "1") {
         j[key] = true;
       } else if (value == "false" || value == "0") {
         j[key] = false;
       } else {
-        throw InputError(fmt::format("query parameter fixed_k1 must be true or false, got \"{}\"", value));
+        throw InputError(fmt::format("query parameter {} must be true or false, got \"{}\"", key, value));
       }
     } else {
       try {

@@ -51,6 +51,20 @@ TEST(JobJson, ParsesOptionsAndMapsThemToEngineOptions) {
   EXPECT_TRUE(ToMappingOptions(ParseJobOptionsText(R"({"name_order": false})")).source.photos_by_capture_time);
   EXPECT_TRUE(ToMappingOptions(JobOptions{}).source.photos_by_capture_time);
   EXPECT_EQ(ToJson(named), json::parse(R"({"name_order": true})"));
+  // refine_focal refines the focal of given intrinsics (as `glam map --intrinsics F
+  // --refine-focal`); k1 stays fixed. Without intrinsics the focal is refined anyway.
+  const JobOptions refined = ParseJobOptionsText(R"({"refine_focal": true,
+      "intrinsics": {"model": "pinhole", "width": 640, "height": 360, "fx": 500, "fy": 500,
+                     "cx": 319.5, "cy": 179.5}})");
+  EXPECT_TRUE(ToMappingOptions(refined).submap.bundle_adjustment.refine_focal);
+  EXPECT_FALSE(ToMappingOptions(refined).submap.bundle_adjustment.refine_k1);
+  EXPECT_TRUE(ToMappingOptions(ParseJobOptionsText(R"({"refine_focal": false})")).submap.bundle_adjustment.refine_focal);
+  EXPECT_EQ(ToJson(refined)["refine_focal"], true);
+  // max_features sets the SIFT budget per frame (as `glam map --max-features`).
+  const JobOptions features = ParseJobOptionsText(R"({"max_features": 4000})");
+  EXPECT_EQ(ToMappingOptions(features).sift.max_features, 4000);
+  EXPECT_EQ(ToMappingOptions(JobOptions{}).sift.max_features, SiftOptions{}.max_features);
+  EXPECT_EQ(ToJson(features), json::parse(R"({"max_features": 4000})"));
   // Round trip through the stored JSON.
   const JobOptions back = ParseJobOptions(ToJson(o));
   EXPECT_EQ(ToJson(back), ToJson(o));
@@ -75,6 +89,10 @@ TEST(JobJson, RejectsBadOptionsWithTheKeyInTheMessage) {
   EXPECT_NE(message(R"({"fixed_k1": "yes"})").find("fixed_k1"), std::string::npos);
   EXPECT_NE(message(R"({"fixed_k1": 1})").find("fixed_k1"), std::string::npos);
   EXPECT_NE(message(R"({"name_order": "yes"})").find("name_order"), std::string::npos);
+  EXPECT_NE(message(R"({"refine_focal": "yes"})").find("refine_focal"), std::string::npos);
+  EXPECT_NE(message(R"({"max_features": 99})").find("max_features"), std::string::npos);
+  EXPECT_NE(message(R"({"max_features": 50001})").find("max_features"), std::string::npos);
+  EXPECT_NE(message(R"({"max_features": 2000.5})").find("max_features"), std::string::npos);
   EXPECT_NE(message(R"({"smooth_window_s": -0.1})").find("smooth_window_s"), std::string::npos);
   EXPECT_NE(message(R"({"smooth_window_s": 6})").find("smooth_window_s"), std::string::npos);
   EXPECT_NE(message(R"({"smooth_window_s": "0.5"})").find("smooth_window_s"), std::string::npos);

@@ -467,10 +467,27 @@ TEST_F(HttpApiTest, PhotosUploadedAsImagesFieldsBecomeAPhotoFolderJob) {
   EXPECT_TRUE(fs::is_empty(dir_ / "data" / "uploads"));
 }
 
+TEST_F(HttpApiTest, PhotoJobTakesItsFeatureBudgetFromTheOptions) {
+  Start({}, "photo_features");
+  auto client = Client();
+  auto res = client.Post("/api/v1/jobs", httplib::MultipartFormDataItems{
+                                             {"images", PngPhoto(1), "a.png", "image/png"},
+                                             {"images", PngPhoto(2), "b.png", "image/png"},
+                                             {"options", R"({"max_features": 3000})", "", "application/json"}});
+  ASSERT_TRUE(res);
+  ASSERT_EQ(res->status, 201) << res->body;
+  const json job = json::parse(res->body);
+  EXPECT_EQ(job["options"]["max_features"], 3000);
+  FollowToEnd(client, job["id"]);
+  std::lock_guard lock(ran_mutex_);
+  EXPECT_EQ(ran_max_features_, 3000);  // not the photo default (kPhotoFolderMaxFeatures)
+}
+
 TEST_F(HttpApiTest, RawBodyUploadTakesOptionsFromQuery) {
   Start({}, "raw");
   auto client = Client();
-  auto res = client.Post("/api/v1/jobs?name=raw%20clip&stride=2&fixed_k1=true&smooth_window_s=0.5&filename=c.avi",
+  auto res = client.Post("/api/v1/jobs?name=raw%20clip&stride=2&fixed_k1=true&smooth_window_s=0.5&refine_focal=1&"
+                         "max_features=3000&filename=c.avi",
                          glam::testing::ReadFile(video_), "video/x-msvideo");
   ASSERT_TRUE(res);
   ASSERT_EQ(res->status, 201) << res->body;
@@ -479,6 +496,8 @@ TEST_F(HttpApiTest, RawBodyUploadTakesOptionsFromQuery) {
   EXPECT_EQ(job["options"]["stride"], 2);
   EXPECT_EQ(job["options"]["fixed_k1"], true);
   EXPECT_EQ(job["options"]["smooth_window_s"], 0.5);
+  EXPECT_EQ(job["options"]["refine_focal"], true);
+  EXPECT_EQ(job["options"]["max_features"], 3000);
   EXPECT_TRUE(fs::exists(dir_ / "data" / "jobs" / job["id"].get<std::string>() / "input.avi"));
   res = client.Post("/api/v1/jobs", {{"X-Glam-Options", R"({"keyframes_per_submap": 6})"}},
                     glam::testing::ReadFile(video_), "application/octet-stream");
@@ -506,6 +525,10 @@ TEST_F(HttpApiTest, BadRequestCorpusGetsDocumentedStatuses) {
   ExpectError(client.Post("/api/v1/jobs?stride=abc", video, "video/x-msvideo"), 400, "bad_request", "bad query");
   ExpectError(client.Post("/api/v1/jobs?fixed_k1=maybe", video, "video/x-msvideo"), 400, "bad_request",
               "bad boolean query");
+  ExpectError(client.Post("/api/v1/jobs?refine_focal=yes", video, "video/x-msvideo"), 400, "bad_request",
+              "bad boolean query (refine_focal)");
+  ExpectError(client.Post("/api/v1/jobs?max_features=20", video, "video/x-msvideo"), 400, "bad_request",
+              "too few features");
   ExpectError(client.Post("/api/v1/jobs?smooth_window_s=0.5s", video, "video/x-msvideo"), 400, "bad_request",
               "bad number query");
   ExpectError(client.Post("/api/v1/jobs", httplib::MultipartFormDataItems{{"other", "x", "", "text/plain"}}), 400,

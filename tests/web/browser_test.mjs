@@ -32,6 +32,8 @@ const JOB_TIMEOUT_MS = 180_000;
 const KEYFRAMES_PER_SUBMAP = 4;
 // A path smoothing other than the default, entered in the form, must reach the job options.
 const SMOOTH_WINDOW_S = 0.3;
+// The product's default budget, sent explicitly: checks that the form's field reaches the job.
+const MAX_FEATURES = 2000;
 
 // A DJI-style GPS track (.SRT) for the clip, from its ground truth (x east, y north, z up,
 // metres) around a made-up origin (small-area spherical conversion; GPS noise is larger).
@@ -228,6 +230,15 @@ async function main() {
     await page.click('#upload-form summary');
     await page.fill('#upload-form input[name=keyframes_per_submap]', String(KEYFRAMES_PER_SUBMAP));
     await page.fill('#upload-form input[name=smooth_window_s]', String(SMOOTH_WINDOW_S));
+    // The form refuses an option that cannot apply before uploading anything: refining the
+    // focal of intrinsics that were not given.
+    await page.check('#upload-form input[name=refine_focal]');
+    await page.click('#upload-form button[type=submit]');
+    await page.waitForFunction(() => /intrinsics/.test(document.querySelector('#upload-status').textContent),
+      null, { timeout: 10_000 });
+    check(!/[?&]job=/.test(page.url()), 'refine_focal without intrinsics was refused by the form, no job created');
+    await page.uncheck('#upload-form input[name=refine_focal]');
+    await page.fill('#upload-form input[name=max_features]', String(MAX_FEATURES));
     const t0 = Date.now();
     await page.click('#upload-form button[type=submit]');
     await page.waitForURL(/[?&]job=[0-9a-f]{16}/, { timeout: 60_000 });
@@ -377,6 +388,8 @@ async function main() {
     console.log(`job table: ${shownWarnings.length} warning(s) shown`);
     check(job.options && job.options.smooth_window_s === SMOOTH_WINDOW_S,
       `the form's path smoothing reached the job: options.smooth_window_s ${job.options && job.options.smooth_window_s} == ${SMOOTH_WINDOW_S}`);
+    check(job.options && job.options.max_features === MAX_FEATURES && !('refine_focal' in job.options),
+      `the form's feature budget reached the job, the unticked boxes did not: options ${JSON.stringify(job.options)}`);
     // Disconnected parts (usually none on this clip) are linked with the job JSON's URLs.
     const shownParts = await page.$$eval(`#jobs tr[data-id="${jobId}"] .part a`, (els) => els.map((e) => new URL(e.href).pathname));
     const expectedParts = (job.parts || []).flatMap((p) => [p.urls.trajectory, p.urls.points]);

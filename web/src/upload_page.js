@@ -1,7 +1,8 @@
 // Upload form: a video (or a set of photos) chosen or dropped, optional name / focal length /
-// intrinsics.json and the advanced job options, sent with a progress bar. Options follow
-// docs/api.md "Creating a job": `focal` (pixels at the original resolution) or `intrinsics` (an
-// intrinsics.json object); not both.
+// intrinsics.json and the advanced job options (numbers and ticked boxes; an empty field or an
+// unticked box sends nothing, so the server's defaults apply), sent with a progress bar.
+// Options follow docs/api.md "Creating a job": `focal` (pixels at the original resolution) or
+// `intrinsics` (an intrinsics.json object); not both.
 
 import { uploadPhotos, uploadVideo } from './api.js';
 
@@ -44,12 +45,22 @@ async function collectOptions(form) {
     options.focal = f;
   }
   if (intrinsicsFile) options.intrinsics = await readIntrinsics(intrinsicsFile);
-  for (const [key, min] of [['stride', 1], ['keyframes_per_submap', 3], ['max_image_size', 0], ['detect_every', 0]]) {
+  for (const [key, min, max] of [['stride', 1], ['keyframes_per_submap', 3], ['max_image_size', 0], ['detect_every', 0],
+    ['max_features', 100, 50000]]) {
     const text = form.elements[key].value.trim();
     if (!text) continue;
     const n = Number(text);
     if (!Number.isInteger(n) || n < min) throw new Error(`${key.replaceAll('_', ' ')} must be an integer ≥ ${min}`);
+    if (max !== undefined && n > max) throw new Error(`${key.replaceAll('_', ' ')} must be at most ${max}`);
     options[key] = n;
+  }
+  if (form.elements.refine_focal.checked) {
+    if (!intrinsicsFile) throw new Error('refining the focal needs an intrinsics file (without one it is estimated anyway)');
+    options.refine_focal = true;
+  }
+  // Boxes left unticked send nothing: the server's defaults apply.
+  for (const key of ['fixed_k1', 'name_order']) {
+    if (form.elements[key].checked) options[key] = true;
   }
   const smooth = form.elements.smooth_window_s.value.trim();
   if (smooth) {
