@@ -1,6 +1,9 @@
 #include "engine/pipeline/decoder_worker.h"
 
+#include <algorithm>
 #include <chrono>
+#include <deque>
+#include <memory>
 #include <optional>
 #include <thread>
 
@@ -36,8 +39,11 @@ DecoderWorker::DecoderWorker(FrameSource& source, const FeatureStageOptions& opt
       cancel_(std::move(cancel)),
       stop_(stop) {
   options_.Check();
-  // Separate extractors (not copies sharing one cv::SIFT) so workers share no state.
-  for (int i = 0; i < options_.workers; ++i) extractors_.emplace_back(options_.sift);
+  // Separate extractors (not copies sharing one cv::SIFT) so workers share no state. With
+  // propagation, extractor 0 stays with this thread and each helper has one of its own.
+  const int extractors =
+      options_.detection_interval > 1 && options_.workers > 1 ? options_.workers + 1 : options_.workers;
+  for (int i = 0; i < extractors; ++i) extractors_.emplace_back(options_.sift);
 }
 
 void DecoderWorker::Run() {
@@ -69,7 +75,7 @@ void DecoderWorker::RunDetectEveryFrame() {
     const auto start = Clock::now();
     std::vector<Frame> batch;
     bool more = true;
-    while (batch.size() < extractors_.size()) {
+    while (batch.size() < static_cast<std::size_t>(options_.workers)) {
       std::optional<Frame> frame = source_.Next();
       if (!frame) {
         more = false;
@@ -109,75 +115,103 @@ std::vector<FrameFeatures> DecoderWorker::ExtractBatch(const std::vector<Frame>&
   return items;
 }
 
-// One step: the reference (a detection frame) has been emitted; read the next N frames, start
-// SIFT on the last of them (the next detection frame) on a helper thread, propagate the others
-// from the reference meanwhile, then emit the detection frame and make it the reference.
-void DecoderWorker::RunWithPropagation() {
-  const auto first_start = Clock::now();
-  std::optional<Frame> first = source_.Next();
-  if (!first) return;
-  FrameFeatures reference = Detect(*first, 0);
-  klt_.SetReference(ToGray(first->bgr), reference.features);
-  busy_seconds_ += Seconds(first_start);
-  if (!Emit(std::move(reference))) return;
+// Blocks of the propagation schedule: the frames after a detection frame up to and including
+// the next detection frame (the block's last), whose SIFT runs on a helper thread while the
+// frames before it are propagated. The schedule is fixed (every N-th frame), so a block's
+// detection never depends on an earlier block's result and can start as soon as it is read.
+struct DecoderWorker::DetectionBlock {
+  std::vector<Frame> frames;
+  bool detect_last = false;  // false at the end of input: every frame is propagated
+  std::optional<FrameFeatures> detection;
+  std::exception_ptr error;
+  std::thread helper;
+  // A block abandoned early (stop, error) still waits for its helper, which uses the frames.
+  ~DetectionBlock() {
+    if (helper.joinable()) helper.join();
+  }
+};
 
+bool DecoderWorker::ReadAhead(std::deque<std::unique_ptr<DetectionBlock>>* blocks,
+                              std::size_t* blocks_started) {
   const auto interval = static_cast<std::size_t>(options_.detection_interval);
-  while (!ShouldStop()) {
-    auto start = Clock::now();
-    std::vector<Frame> frames;
-    while (frames.size() < interval) {
+  const std::size_t helpers = extractors_.size() - 1;
+  // Detection frames in flight: one per helper, bounded so that read-ahead keeps few frames.
+  const std::size_t max_blocks =
+      helpers == 0 ? 1 : std::clamp<std::size_t>(kMaxReadAheadFrames / interval, 1, helpers);
+  while (blocks->size() < max_blocks) {
+    auto block = std::make_unique<DetectionBlock>();
+    while (block->frames.size() < interval) {
       std::optional<Frame> frame = source_.Next();
       if (!frame) break;
-      frames.push_back(std::move(*frame));
+      block->frames.push_back(std::move(*frame));
     }
-    if (frames.empty()) return;
-    // At the end of input the last frame is propagated like the others (no detection frame).
-    const bool detect_last = frames.size() == interval;
-    const std::size_t propagated = detect_last ? frames.size() - 1 : frames.size();
-
-    std::optional<FrameFeatures> detection;
-    std::exception_ptr detection_error;
-    std::thread helper;
-    auto detect_last_frame = [&] {
-      NameCurrentThread("glam-sift");
-      try {
-        detection = Detect(frames.back(), extractors_.size() > 1 ? 1 : 0);
-      } catch (...) {
-        detection_error = std::current_exception();
-      }
-    };
-    if (detect_last && extractors_.size() > 1) helper = std::thread(detect_last_frame);
-    // Propagated frames are handed on as they are made, so the builder works on them while the
-    // helper still extracts SIFT.
-    bool open = true;
-    std::exception_ptr propagation_error;
-    try {
-      for (std::size_t i = 0; i < propagated && open; ++i) {
-        const cv::Mat gray = ToGray(frames[i].bgr);
-        FrameFeatures item{frames[i].index, frames[i].timestamp_s, klt_.Propagate(gray)};
-        const double survival = static_cast<double>(item.features.size()) /
-                                static_cast<double>(std::max<std::size_t>(1, klt_.reference_size()));
-        if (survival < options_.klt.min_survival_fraction) {
-          // Most of the reference is gone: detect here and follow this frame instead.
-          item = Detect(frames[i], 0);
-          klt_.SetReference(gray, item.features);
+    if (block->frames.empty()) return false;
+    block->detect_last = block->frames.size() == interval;
+    if (block->detect_last && helpers > 0) {
+      // Blocks finish in the order they start, so extractor 1 + (n mod helpers) is free again.
+      const std::size_t extractor = 1 + *blocks_started % helpers;
+      DetectionBlock* b = block.get();
+      b->helper = std::thread([this, b, extractor] {
+        NameCurrentThread("glam-sift");
+        try {
+          b->detection = Detect(b->frames.back(), extractor);
+        } catch (...) {
+          b->error = std::current_exception();
         }
-        busy_seconds_ += Seconds(start);
-        open = Emit(std::move(item));
-        start = Clock::now();
-      }
-    } catch (...) {
-      propagation_error = std::current_exception();
+      });
     }
-    if (helper.joinable()) helper.join();
-    if (propagation_error) std::rethrow_exception(propagation_error);
-    if (!open) return;
-    if (detect_last && extractors_.size() == 1 && !detection_error) detect_last_frame();
-    if (detection_error) std::rethrow_exception(detection_error);
-    if (detection) klt_.SetReference(ToGray(frames.back().bgr), detection->features);
+    ++*blocks_started;
+    const bool ended = !block->detect_last;
+    blocks->push_back(std::move(block));
+    if (ended) return false;
+  }
+  return true;
+}
+
+// The first frame is detected here while the helpers already extract the next detection
+// frames; then block by block: propagate its frames from the reference (handed on as they are
+// made, so the builder works on them meanwhile), wait for its detection, emit it and make it
+// the reference, and read the next block so that its SIFT starts.
+void DecoderWorker::RunWithPropagation() {
+  auto start = Clock::now();
+  std::optional<Frame> first = source_.Next();
+  if (!first) return;
+  std::deque<std::unique_ptr<DetectionBlock>> blocks;
+  std::size_t blocks_started = 0;
+  bool more = ReadAhead(&blocks, &blocks_started);
+  FrameFeatures reference = Detect(*first, 0);
+  klt_.SetReference(ToGray(first->bgr), reference.features);
+  busy_seconds_ += Seconds(start);
+  if (!Emit(std::move(reference))) return;
+
+  while (!blocks.empty() && !ShouldStop()) {
+    start = Clock::now();
+    DetectionBlock& block = *blocks.front();
+    const std::size_t propagated = block.detect_last ? block.frames.size() - 1 : block.frames.size();
+    for (std::size_t i = 0; i < propagated; ++i) {
+      const cv::Mat gray = ToGray(block.frames[i].bgr);
+      FrameFeatures item{block.frames[i].index, block.frames[i].timestamp_s, klt_.Propagate(gray)};
+      const double survival = static_cast<double>(item.features.size()) /
+                              static_cast<double>(std::max<std::size_t>(1, klt_.reference_size()));
+      if (survival < options_.klt.min_survival_fraction) {
+        // Most of the reference is gone: detect here and follow this frame instead.
+        item = Detect(block.frames[i], 0);
+        klt_.SetReference(gray, item.features);
+      }
+      busy_seconds_ += Seconds(start);
+      if (!Emit(std::move(item))) return;
+      start = Clock::now();
+    }
+    if (!block.detect_last) return;  // end of input
+    if (block.helper.joinable()) block.helper.join();
+    if (block.error) std::rethrow_exception(block.error);
+    if (!block.detection) block.detection = Detect(block.frames.back(), 0);  // one worker
+    klt_.SetReference(ToGray(block.frames.back().bgr), block.detection->features);
+    FrameFeatures detection = std::move(*block.detection);
+    blocks.pop_front();
+    if (more) more = ReadAhead(&blocks, &blocks_started);
     busy_seconds_ += Seconds(start);
-    if (detection && !Emit(std::move(*detection))) return;
-    if (!detect_last) return;
+    if (!Emit(std::move(detection))) return;
   }
 }
 

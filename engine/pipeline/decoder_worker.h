@@ -7,15 +7,22 @@
 //    parallel.
 //  * detection_interval = N > 1: SIFT on every N-th frame only; the frames in between get the
 //    last detection frame's keypoints carried over by KLT (KltPropagator). SIFT of the next
-//    detection frame runs on a helper thread while KLT fills in the frames before it, so the
-//    two overlap on two cores. A frame whose KLT survivors fall below
-//    KltOptions::min_survival_fraction gets SIFT at once and becomes the new reference.
+//    `workers` detection frames runs on helper threads (the schedule is fixed, so they can
+//    start as soon as their frames are read) while KLT fills in the frames before them. Why
+//    more than one: at 1280x720 one detection costs ~320 ms against ~60 ms for the five
+//    frames KLT fills in, so with one helper the stage ran on little more than one core
+//    (docs/benchmarks.md). A frame whose KLT survivors fall below
+//    KltOptions::min_survival_fraction gets SIFT at once (on this thread) and becomes the new
+//    reference; the scheduled detections are unaffected, so the output does not depend on
+//    the number of workers.
 #pragma once
 
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
+#include <deque>
 #include <exception>
+#include <memory>
 #include <vector>
 
 #include "engine/core/bounded_queue.h"
@@ -46,6 +53,10 @@ struct FeatureStageOptions {
 
 class DecoderWorker {
  public:
+  // Frames read ahead for detections in flight are bounded by this (so a long detection
+  // interval keeps one block, not `workers` blocks, of decoded frames in memory).
+  static constexpr std::size_t kMaxReadAheadFrames = 64;
+
   DecoderWorker(FrameSource& source, const FeatureStageOptions& options,
                 BoundedQueue<FrameFeatures>& queue, CancellationToken cancel,
                 const std::atomic<bool>& stop);
@@ -64,6 +75,10 @@ class DecoderWorker {
   // Both return when the input ends, the consumer closed the queue or the run must stop.
   void RunDetectEveryFrame();
   void RunWithPropagation();
+  struct DetectionBlock;
+  // Reads blocks (and starts their detections) until as many are pending as helpers allow;
+  // false once the input has ended.
+  bool ReadAhead(std::deque<std::unique_ptr<DetectionBlock>>* blocks, std::size_t* blocks_started);
   std::vector<FrameFeatures> ExtractBatch(const std::vector<Frame>& batch);
   FrameFeatures Detect(const Frame& frame, std::size_t extractor) const;
   bool Emit(FrameFeatures item);

@@ -48,8 +48,10 @@ struct MappingOptions {
   // rather than piling up submaps in memory.
   std::size_t alignment_queue_capacity = 4;
   // Frames whose SIFT features are extracted at the same time (one extractor per worker). SIFT
-  // on every frame is the cost that bounds throughput (~270 ms per 720p frame on one core),
-  // so on 2 cores two workers nearly double the frame rate; the submap builder needs ~10 %.
+  // is the cost that bounds throughput (~270 ms per 720p frame on one core), so on 2 cores two
+  // workers nearly double the frame rate; the submap builder needs ~10 %. With KLT between
+  // detections, the next `feature_workers` detection frames are extracted ahead on helper
+  // threads (DecoderWorker); the output is the same for any number of workers.
   int feature_workers = 2;
   // SIFT on every N-th frame, KLT optical flow in between (engine/features/klt_propagator.h).
   // 1 = SIFT on every frame, as in the paper. 0 = automatic: one detection per

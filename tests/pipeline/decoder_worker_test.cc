@@ -72,7 +72,7 @@ FeatureStageOptions Options(int interval, int workers) {
 }
 
 TEST(DecoderWorker, DetectsEveryNthFrameAndPropagatesTheRestInOrder) {
-  for (int workers : {1, 2}) {
+  for (int workers : {1, 2, 3}) {
     PanningSource source(23);
     const std::vector<FrameFeatures> items = RunWorker(source, Options(5, workers));
     ASSERT_EQ(items.size(), 23u) << workers << " workers";
@@ -98,6 +98,52 @@ TEST(DecoderWorker, DetectsEveryNthFrameAndPropagatesTheRestInOrder) {
       }
     }
     EXPECT_GT(checked, static_cast<int>(prop.size()) * 9 / 10);
+  }
+}
+
+// SIFT of the next detection frames runs ahead on `workers` helper threads (fewer when the
+// interval is long); what the stage emits is the same for every worker count.
+TEST(DecoderWorker, OutputDoesNotDependOnTheNumberOfWorkers) {
+  for (int interval : {3, 40}) {
+    std::vector<std::vector<FrameFeatures>> runs;
+    for (int workers : {1, 2, 3}) {
+      PanningSource source(90);
+      runs.push_back(RunWorker(source, Options(interval, workers)));
+    }
+    for (std::size_t r = 1; r < runs.size(); ++r) {
+      ASSERT_EQ(runs[r].size(), runs[0].size());
+      for (std::size_t i = 0; i < runs[0].size(); ++i) {
+        const Features& a = runs[0][i].features;
+        const Features& b = runs[r][i].features;
+        ASSERT_EQ(runs[r][i].index, runs[0][i].index);
+        EXPECT_EQ(b.detected, a.detected) << "interval " << interval << ", frame " << i;
+        ASSERT_EQ(b.size(), a.size()) << "interval " << interval << ", frame " << i;
+        for (std::size_t k = 0; k < a.size(); ++k) {
+          EXPECT_EQ(b.keypoints[k].pt, a.keypoints[k].pt);
+        }
+        EXPECT_EQ(cv::norm(a.descriptors, b.descriptors, cv::NORM_INF), 0.0) << "frame " << i;
+      }
+    }
+  }
+}
+
+// A source that fails at frame `fail_at` (a truncated file found while reading ahead).
+class FailingSource : public PanningSource {
+ public:
+  FailingSource(int frames, int fail_at) : PanningSource(frames), fail_at_(fail_at) {}
+  std::optional<Frame> Next() override {
+    if (frames_delivered() == fail_at_) throw InputError("decode failed");
+    return PanningSource::Next();
+  }
+
+ private:
+  int fail_at_;
+};
+
+TEST(DecoderWorker, AReadErrorWhileDetectionsRunAheadIsReportedAndLeavesNoThread) {
+  for (int workers : {1, 2}) {
+    FailingSource source(60, 17);
+    EXPECT_THROW(RunWorker(source, Options(4, workers)), InputError) << workers << " workers";
   }
 }
 
