@@ -22,3 +22,5 @@ endif()
 find_package(PkgConfig REQUIRED)
 pkg_check_modules(HTTPLIB REQUIRED IMPORTED_TARGET cpp-httplib)
 pkg_check_modules(EXIF REQUIRED IMPORTED_TARGET libexif)  # GPS of drone photos (engine/geo)
+# Video decoding straight to the processing size (engine/video/video_decoder.h).
+pkg_check_modules(LIBAV REQUIRED IMPORTED_TARGET libavformat libavcodec libavutil libswscale)

@@ -15,7 +15,7 @@ PACKAGES=(
   libtinygltf-dev libdraco-dev libcpp-httplib-dev nlohmann-json3-dev
   libspdlog-dev libfmt-dev libsqlite3-dev libtbb-dev libcli11-dev libexif-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  ffmpeg libavcodec-dev libavformat-dev libswscale-dev
+  ffmpeg libavcodec-dev libavformat-dev libavutil-dev libswscale-dev
   curl jq
 )
 

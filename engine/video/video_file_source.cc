@@ -37,36 +37,26 @@ VideoFileSource::VideoFileSource(const std::filesystem::path& path,
   if (std::filesystem::file_size(path, ec) == 0) {
     throw InputError(fmt::format("video '{}' is empty (0 bytes)", path.string()));
   }
-  if (!capture_.open(path.string(), cv::CAP_FFMPEG)) {
-    throw InputError(fmt::format(
-        "cannot open '{}' as a video: not a video file, or a codec FFmpeg cannot decode",
-        path.string()));
-  }
-  if (!capture_.read(first_frame_) || first_frame_.empty()) {
+  decoder_ = std::make_unique<VideoDecoder>(path);  // throws InputError for non-videos
+  if (!decoder_->Grab()) {
     throw InputError(fmt::format("video '{}' contains no decodable frames", path.string()));
   }
+  first_pending_ = true;
   position_ = 1;
 
-  info_.fps = capture_.get(cv::CAP_PROP_FPS);
+  info_.fps = decoder_->fps();
   if (!(info_.fps > 0.0) || !std::isfinite(info_.fps) || info_.fps > 1000.0) {
     GLAM_LOG_WARN("video '{}' reports no usable frame rate ({}); assuming 30 fps",
                   path.string(), info_.fps);
     info_.fps = 30.0;
   }
-  const double count = capture_.get(cv::CAP_PROP_FRAME_COUNT);
-  info_.frame_count = (count >= 1.0 && std::isfinite(count)) ? static_cast<int64_t>(count) : -1;
-  info_.original_size = first_frame_.size();
+  info_.frame_count = decoder_->announced_frame_count();
+  info_.original_size = decoder_->display_size();
   info_.processing_size = ProcessingSize(info_.original_size, options_.max_image_size);
   info_.scale = static_cast<double>(info_.processing_size.width) / info_.original_size.width;
   GLAM_LOG_DEBUG("opened video '{}': {}x{} @ {:.3f} fps, ~{} frames, processing {}x{}",
                  path.string(), info_.original_size.width, info_.original_size.height, info_.fps,
                  info_.frame_count, info_.processing_size.width, info_.processing_size.height);
-}
-
-bool VideoFileSource::DecodeNext(cv::Mat* bgr) {
-  const bool ok = bgr != nullptr ? capture_.read(*bgr) && !bgr->empty() : capture_.grab();
-  if (ok) ++position_;
-  return ok;
 }
 
 void VideoFileSource::MarkEnd() {
@@ -82,28 +72,24 @@ void VideoFileSource::MarkEnd() {
 
 std::optional<Frame> VideoFileSource::Next() {
   if (done_) return std::nullopt;
-  cv::Mat bgr;
-  if (next_index_ == 0 && position_ == 1 && !first_frame_.empty()) {
-    bgr = first_frame_;  // decoded at open
-  } else {
-    while (position_ < next_index_) {
-      if (!DecodeNext(nullptr)) {
+  const bool first = next_index_ == 0 && first_pending_;  // decoded at open
+  if (!first) {
+    // Frames before the one asked for are decoded but not converted.
+    while (position_ <= next_index_) {
+      if (!decoder_->Grab()) {
         MarkEnd();
         return std::nullopt;
       }
-    }
-    if (!DecodeNext(&bgr)) {
-      MarkEnd();
-      return std::nullopt;
+      ++position_;
     }
   }
-  first_frame_.release();
+  first_pending_ = false;
 
   Frame frame;
   frame.index = next_index_;
   frame.timestamp_s = static_cast<double>(next_index_) / info_.fps;
-  frame.original_size = bgr.size();
-  frame.bgr = ToProcessingSize(bgr, info_.processing_size);
+  frame.original_size = decoder_->display_size();
+  decoder_->Retrieve(info_.processing_size, &frame.bgr);
   next_index_ += options_.stride;
   ++delivered_;
   return frame;
@@ -117,19 +103,15 @@ void VideoFileSource::SeekTo(int64_t index) {
   next_index_ = index;
   done_ = info_.frame_count > 0 && index == info_.frame_count;  // at the end: nothing left
   if (done_) return;
-  const bool first_pending = (position_ == 1 && !first_frame_.empty());
-  if (first_pending && index == 0) return;
+  if (first_pending_ && index == 0) return;
   if (index >= position_ && index - position_ <= kMaxGrabSeek) return;  // grab forward
-  first_frame_.release();
-  if (!capture_.set(cv::CAP_PROP_POS_FRAMES, static_cast<double>(index))) {
-    throw EnvironmentError(
-        fmt::format("decoder cannot seek to frame {} of '{}'", index, path_.string()));
+  first_pending_ = false;
+  if (!decoder_->Seek(index)) {  // the stream ends before `index`
+    position_ = decoder_->index() + 1;
+    MarkEnd();
+    return;
   }
-  position_ = static_cast<int64_t>(std::llround(capture_.get(cv::CAP_PROP_POS_FRAMES)));
-  if (position_ > index) {
-    throw EnvironmentError(fmt::format("decoder overshot seeking to frame {} of '{}' (at {})",
-                                       index, path_.string(), position_));
-  }
+  position_ = index;
 }
 
 }  // namespace glam

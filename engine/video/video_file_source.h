@@ -1,16 +1,15 @@
-// Video files through OpenCV's FFmpeg backend (MP4/MOV/MKV/AVI, H.264/H.265/...).
-// Decoding is sequential; skipped frames (stride, short forward seeks) are only grabbed, not
-// converted to BGR, which is most of the saving. FFmpeg's own decode threads can be tuned with
-// the environment variable OPENCV_FFMPEG_CAPTURE_OPTIONS="threads;N" (OpenCV 4.6 has no
-// property for it; we do not set it ourselves because setenv is not thread-safe).
+// Video files (MP4/MOV/MKV/AVI, H.264/H.265/...) through FFmpeg's libraries (VideoDecoder).
+// Decoding is sequential; skipped frames (stride, short forward seeks) are only decoded, not
+// converted, and the frames delivered are converted straight to the processing size.
 #pragma once
 
 #include <filesystem>
 #include <optional>
 
-#include <opencv2/videoio.hpp>
+#include <memory>
 
 #include "engine/video/frame_source.h"
+#include "engine/video/video_decoder.h"
 
 namespace glam {
 
@@ -27,15 +26,14 @@ class VideoFileSource : public FrameSource {
   bool ended_early() const override { return ended_early_; }
 
  private:
-  bool DecodeNext(cv::Mat* bgr);  // decodes frame `position_`, advances position_
   void MarkEnd();
 
   std::filesystem::path path_;
   FrameSourceOptions options_;
-  cv::VideoCapture capture_;
+  std::unique_ptr<VideoDecoder> decoder_;
   FrameSourceInfo info_;
-  cv::Mat first_frame_;        // decoded at open; served if the first request is frame 0
-  int64_t position_ = 0;       // index of the frame the decoder produces next
+  bool first_pending_ = false;  // frame 0, decoded at open, is the decoder's current frame
+  int64_t position_ = 0;        // index of the frame the decoder produces next
   int64_t next_index_ = 0;     // index Next() delivers next
   int64_t delivered_ = 0;
   bool done_ = false;

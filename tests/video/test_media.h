@@ -53,15 +53,22 @@ inline void WriteAvi(const std::filesystem::path& path, cv::Size size, int frame
 
 inline bool HaveFfmpeg() { return std::system("ffmpeg -version > /dev/null 2>&1") == 0; }
 
-// H.264 MP4 (moov atom first, as streaming-friendly encoders write it) transcoded by the
-// ffmpeg binary from an AVI written with WriteAvi.
-inline bool WriteMp4(const std::filesystem::path& path, cv::Size size, int frames, double fps) {
+// A video encoded by the ffmpeg binary from an AVI written with WriteAvi; `encode` holds the
+// output options (codec, pixel format, GOP, metadata).
+inline bool WriteWithFfmpeg(const std::filesystem::path& path, cv::Size size, int frames,
+                            double fps, const std::string& encode) {
   const auto avi = path.parent_path() / (path.stem().string() + "_src.avi");
   WriteAvi(avi, size, frames, fps);
-  const std::string cmd = "ffmpeg -nostdin -v error -y -i '" + avi.string() +
-                          "' -c:v libx264 -preset ultrafast -qp 10 -pix_fmt yuv420p -g 10 "
-                          "-movflags +faststart '" + path.string() + "'";
+  const std::string cmd = "ffmpeg -nostdin -v error -y -i '" + avi.string() + "' " + encode +
+                          " '" + path.string() + "'";
   return std::system(cmd.c_str()) == 0;
+}
+
+// H.264 MP4 (moov atom first, as streaming-friendly encoders write it).
+inline bool WriteMp4(const std::filesystem::path& path, cv::Size size, int frames, double fps) {
+  return WriteWithFfmpeg(path, size, frames, fps,
+                         "-c:v libx264 -preset ultrafast -qp 10 -pix_fmt yuv420p -g 10 "
+                         "-movflags +faststart");
 }
 
 class TempDirTest : public ::testing::Test {
