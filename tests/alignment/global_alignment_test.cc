@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "tests/support/temp_dir.h"
 #include "engine/core/intrinsics_io.h"
 #include "engine/core/logging.h"
 #include "engine/core/sim3.h"
@@ -33,7 +34,7 @@ const fs::path kClip = fs::path(GLAM_TEST_FIXTURES_DIR) / "loop";
 constexpr double kFps = 15.0;  // tests/fixtures/CMakeLists.txt
 
 fs::path FreshDir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("glam_global_alignment_" + name);
+  const fs::path dir = testing::FreshTempDir("global_alignment_" + name);
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;

@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/support/temp_dir.h"
 #include "engine/core/intrinsics_io.h"
 #include "engine/export/tum_trajectory.h"
 #include "engine/map/submap_io.h"
@@ -42,7 +43,7 @@ struct MappedClip {
 
 MappedClip MapAndEvaluate(MappingOptions options, bool calibrated, const std::string& name) {
   if (calibrated) UseCalibration(&options, ReadIntrinsicsJson(kClip / "intrinsics.json"));
-  const fs::path out = fs::temp_directory_path() / ("glam_climb_" + name);
+  const fs::path out = testing::FreshTempDir("climb_" + name);
   fs::remove_all(out);
   RunMapping(kClip / "video.mp4", out, options);
   MappedClip run{eval::EvaluateDirectories(kClip, out, {}), 0};

@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/support/temp_dir.h"
 #include "engine/core/intrinsics_io.h"
 #include "engine/pipeline/mapping_job.h"
 #include "engine/pipeline/mapping_report.h"
@@ -38,7 +39,7 @@ MappingReport MapWithFocalFactor(double factor, const std::string& name, const f
   options.intrinsics = in;
   options.submap.bundle_adjustment.refine_focal = false;  // what --intrinsics means
   options.submap.bundle_adjustment.refine_k1 = false;
-  const fs::path out = fs::temp_directory_path() / ("glam_fixed_focal_check_" + name);
+  const fs::path out = testing::FreshTempDir("fixed_focal_check_" + name);
   fs::remove_all(out);
   return RunMapping(clip / "video.mp4", out, options);
 }

@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "tests/support/temp_dir.h"
 #include "engine/core/intrinsics_io.h"
 #include "engine/pipeline/mapping_job.h"
 #include "engine/pipeline/mapping_options.h"
@@ -33,7 +34,7 @@ struct MappedClip {
 
 MappedClip MapAndEvaluate(MappingOptions options, const std::string& name) {
   UseCalibration(&options, ReadIntrinsicsJson(kClip / "intrinsics.json"));
-  const fs::path out = fs::temp_directory_path() / ("glam_flight_start_" + name);
+  const fs::path out = testing::FreshTempDir("flight_start_" + name);
   fs::remove_all(out);
   RunMapping(kClip / "video.mp4", out, options);
   MappedClip run;

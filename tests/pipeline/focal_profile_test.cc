@@ -12,6 +12,7 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/support/temp_dir.h"
 #include "engine/core/error.h"
 #include "engine/core/intrinsics_io.h"
 #include "engine/pipeline/mapping_job.h"
@@ -36,7 +37,7 @@ struct MappedClip {
 
 // Uncalibrated, as a user without intrinsics runs it: the focal starts at the default guess.
 MappedClip MapUncalibrated(const fs::path& clip, const MappingOptions& options, const std::string& name) {
-  const fs::path out = fs::temp_directory_path() / ("glam_focal_profile_" + name);
+  const fs::path out = testing::FreshTempDir("focal_profile_" + name);
   fs::remove_all(out);
   MappedClip run{RunMapping(clip / "video.mp4", out, options), {}};
   run.result = eval::EvaluateDirectories(clip, out, {});

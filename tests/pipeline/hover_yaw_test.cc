@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "tests/support/temp_dir.h"
 #include "engine/pipeline/mapping_job.h"
 #include "tools/eval/evaluation.h"
 
@@ -22,12 +23,20 @@ namespace fs = std::filesystem;
 
 const fs::path kClip = fs::path(GLAM_TEST_FIXTURES_DIR) / "hover_yaw";
 
-// Each configuration is mapped once per test binary (the two tests share the run without
-// rotation-only poses).
+// Output directory of a configuration: one per process (CTest runs the two tests below as
+// separate processes, at the same time under -j2, and both map "no_rotation_only").
+fs::path OutDir(const std::string& name) {
+  static std::map<std::string, fs::path> dirs;
+  if (const auto it = dirs.find(name); it != dirs.end()) return it->second;
+  return dirs.emplace(name, testing::FreshTempDir("hover_yaw_" + name)).first->second;
+}
+
+// Each configuration is mapped once per test process (the two tests share the run without
+// rotation-only poses when they run in one process).
 eval::EvaluationResult MapAndEvaluate(const MappingOptions& options, const std::string& name) {
   static std::map<std::string, eval::EvaluationResult> done;
   if (const auto it = done.find(name); it != done.end()) return it->second;
-  const fs::path out = fs::temp_directory_path() / ("glam_hover_yaw_" + name);
+  const fs::path out = OutDir(name);
   fs::remove_all(out);
   RunMapping(kClip / "video.mp4", out, options);  // uncalibrated: the focal is estimated
   const eval::EvaluationResult result = eval::EvaluateDirectories(kClip, out, {});
@@ -83,7 +92,7 @@ TEST(HoverYaw, YawsToUnseenGroundArePosedByRotationOnly) {
   EXPECT_LT(with.map->median, 0.35);
   // report.json counts them (measured 146 over the three yaws).
   auto rotation_only = [](const std::string& name) {
-    std::ifstream in(fs::temp_directory_path() / ("glam_hover_yaw_" + name) / "report.json");
+    std::ifstream in(OutDir(name) / "report.json");
     return nlohmann::json::parse(in).at("frames_rotation_only").get<int>();
   };
   EXPECT_EQ(rotation_only("no_rotation_only"), 0);

@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/support/temp_dir.h"
 #include "engine/core/intrinsics_io.h"
 #include "engine/export/tum_trajectory.h"
 #include "engine/pipeline/mapping_job.h"
@@ -52,7 +53,7 @@ MappedRun MapWithWindow(double half_window_s, const std::string& name) {
   MappingOptions options;
   UseCalibration(&options, ReadIntrinsicsJson(kClip / "intrinsics.json"));
   options.submap.centre_smoothing.half_window_s = half_window_s;
-  const fs::path out = fs::temp_directory_path() / ("glam_pose_jitter_" + name);
+  const fs::path out = testing::FreshTempDir("pose_jitter_" + name);
   fs::remove_all(out);
   RunMapping(kClip / "video.mp4", out, options);
   const eval::EvaluationResult result = eval::EvaluateDirectories(kClip, out, {});

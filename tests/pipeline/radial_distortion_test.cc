@@ -11,6 +11,7 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/support/temp_dir.h"
 #include "engine/core/intrinsics_io.h"
 #include "engine/pipeline/mapping_job.h"
 #include "engine/pipeline/mapping_report.h"
@@ -29,7 +30,7 @@ struct MappedClip {
 };
 
 MappedClip MapUncalibrated(const MappingOptions& options, const std::string& name) {
-  const fs::path out = fs::temp_directory_path() / ("glam_radial_distortion_" + name);
+  const fs::path out = testing::FreshTempDir("radial_distortion_" + name);
   fs::remove_all(out);
   MappedClip run{RunMapping(kDistortedClip / "video.mp4", out, options), {}};
   run.result = eval::EvaluateDirectories(kDistortedClip, out, {});
