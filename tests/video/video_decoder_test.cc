@@ -174,6 +174,26 @@ TEST_F(VideoDecoderTest, TenBitHevcSeeksExactly) {
   ExpectExactFramesAndSeeks(path, 90);
 }
 
+// Other containers and codecs users upload: VP9 in Matroska (timestamps in milliseconds, not
+// frames), MPEG-4 Part 2 with B-frames in AVI, 10-bit 4:2:2 ProRes in QuickTime.
+TEST_F(VideoDecoderTest, OtherContainersAndCodecsSeekExactly) {
+  if (!HaveFfmpeg()) GTEST_SKIP() << "ffmpeg binary not available";
+  const std::vector<std::pair<std::string, std::string>> formats = {
+      {"vp9.mkv", "-c:v libvpx-vp9 -crf 10 -b:v 0 -deadline realtime -cpu-used 8 -g 24"},
+      {"mpeg4.avi", "-c:v mpeg4 -q:v 2 -bf 2 -g 24"},
+      {"prores.mov", "-c:v prores_ks -profile:v 2 -pix_fmt yuv422p10le"},
+  };
+  for (const auto& [name, encode] : formats) {
+    SCOPED_TRACE(name);
+    const auto path = dir_ / name;
+    if (!WriteWithFfmpeg(path, {320, 180}, 90, 30.0, encode)) {
+      ADD_FAILURE() << "ffmpeg could not write " << name;  // all are in Debian's ffmpeg
+      continue;
+    }
+    ExpectExactFramesAndSeeks(path, 90);
+  }
+}
+
 // A damaged frame in the middle costs that frame, not the rest of the video.
 TEST_F(VideoDecoderTest, DamageInTheMiddleIsSkipped) {
   const auto path = dir_ / "damaged.avi";
