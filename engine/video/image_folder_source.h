@@ -6,7 +6,8 @@
 // in plain name order (FrameSourceOptions::photos_by_capture_time = false: always). Files that are not images (by extension) are ignored;
 // images that fail to decode or whose size differs from the first image are skipped with a
 // warning (their index stays reserved, so indices always match the sorted file list). The
-// first image that decodes sets the size.
+// first image that decodes sets the size. JPEGs larger than the processing size are decoded
+// at 1/2, 1/4 or 1/8 of their size by libjpeg (never below the processing size), then resized.
 #pragma once
 
 #include <filesystem>
@@ -43,6 +44,7 @@ class ImageFolderSource : public FrameSource {
   int64_t next_index_ = 0;
   int64_t delivered_ = 0;
   std::size_t photos_reordered_by_time_ = 0;
+  int decode_reduction_ = 1;  // JPEGs are decoded at 1/decode_reduction_ of the original size
 };
 
 // True for file names with a common image extension (case-insensitive).

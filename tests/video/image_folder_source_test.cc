@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "engine/core/error.h"
 #include "engine/video/frame_source.h"
@@ -46,6 +47,53 @@ TEST_F(ImageFolderSourceTest, NaturalNameOrderSkipsNonImages) {
   }
   EXPECT_EQ(decoded, (std::vector<int>{1, 2, 10, 33}));
   EXPECT_EQ(indices, (std::vector<int64_t>{0, 1, 2, 3}));
+}
+
+// Large JPEGs are decoded at a reduced size by libjpeg (1/4 here: 2000x1500 -> 500x375 still
+// covers 480x360) and then resized: the frames must match a full decode resized with
+// INTER_AREA, and a JPEG of another size must still be told apart and skipped.
+TEST_F(ImageFolderSourceTest, LargeJpegsDecodedReducedMatchAFullDecode) {
+  cv::RNG rng(5);
+  std::vector<cv::Mat> photos;
+  for (int i = 0; i < 3; ++i) {
+    cv::Mat photo(1500, 2000, CV_8UC3);
+    rng.fill(photo, cv::RNG::UNIFORM, cv::Scalar::all(0), cv::Scalar::all(255));
+    cv::GaussianBlur(photo, photo, cv::Size(0, 0), 6.0);
+    cv::normalize(photo, photo, 0, 255, cv::NORM_MINMAX);
+    // Named .png but JPEG inside: decoding goes by content.
+    const std::string name = i == 1 ? "photo_1.png" : "photo_" + std::to_string(i) + ".jpg";
+    std::vector<unsigned char> jpeg;
+    ASSERT_TRUE(cv::imencode(".jpg", photo, jpeg, {cv::IMWRITE_JPEG_QUALITY, 95}));
+    std::ofstream(dir_ / name, std::ios::binary)
+        .write(reinterpret_cast<const char*>(jpeg.data()), static_cast<std::streamsize>(jpeg.size()));
+    photos.push_back(photo);
+  }
+  // 1800x1350 decodes to 450x338 at 1/4: not the 500x375 of the others.
+  cv::Mat other;
+  cv::resize(photos[0], other, {1800, 1350});
+  ASSERT_TRUE(cv::imwrite((dir_ / "photo_3.jpg").string(), other));
+
+  FrameSourceOptions options;
+  options.max_image_size = 480;
+  options.photos_by_capture_time = false;
+  auto source = OpenFrameSource(dir_, options);
+  EXPECT_EQ(source->info().original_size, cv::Size(2000, 1500));
+  EXPECT_EQ(source->info().processing_size, cv::Size(480, 360));
+  int delivered = 0;
+  while (auto frame = source->Next()) {
+    ASSERT_LT(frame->index, 3);
+    EXPECT_EQ(frame->original_size, cv::Size(2000, 1500));
+    ASSERT_EQ(frame->bgr.size(), cv::Size(480, 360));
+    const auto file = dynamic_cast<ImageFolderSource&>(*source).files()[frame->index];
+    const cv::Mat full = ToProcessingSize(cv::imread(file.string()), {480, 360});
+    cv::Mat grey, full_grey, diff;
+    cv::cvtColor(frame->bgr, grey, cv::COLOR_BGR2GRAY);
+    cv::cvtColor(full, full_grey, cv::COLOR_BGR2GRAY);
+    cv::absdiff(grey, full_grey, diff);
+    EXPECT_LT(cv::mean(diff)[0], 1.5) << file;
+    ++delivered;
+  }
+  EXPECT_EQ(delivered, 3);  // photo_3 skipped: another size
 }
 
 TEST_F(ImageFolderSourceTest, StrideSeekAndDownscale) {
