@@ -96,6 +96,7 @@ void VideoDecoderOptions::Check() const {
 
 struct VideoDecoder::Impl {
   std::filesystem::path path;
+  int threads = 0;
   std::unique_ptr<AVFormatContext, FormatDeleter> format;
   std::unique_ptr<AVCodecContext, CodecDeleter> codec;
   std::unique_ptr<AVFrame, FrameDeleter> frame{av_frame_alloc()};
@@ -110,6 +111,8 @@ struct VideoDecoder::Impl {
   // address) needs its colour matrix and range set again.
   std::array<int, 8> sws_key{};
 
+  // Opens (or opens again, at the start) the file and its decoder. Throws InputError.
+  void Open();
   // Decodes the next frame into `frame`; false at the end of the stream.
   bool DecodeFrame();
   int64_t FrameTimestamp() const;
@@ -180,13 +183,13 @@ cv::Size VideoDecoder::Impl::DisplaySize() const {
   return sideways ? cv::Size(frame->height, frame->width) : cv::Size(frame->width, frame->height);
 }
 
-VideoDecoder::VideoDecoder(const std::filesystem::path& path, const VideoDecoderOptions& options)
-    : impl_(std::make_unique<Impl>()) {
-  options.Check();
-  InstallLibavLogCallback();
-  Impl& d = *impl_;
-  d.path = path;
-  if (!d.frame || !d.packet) throw EnvironmentError("out of memory allocating a video frame");
+void VideoDecoder::Impl::Open() {
+  codec.reset();
+  format.reset();
+  sws.reset();
+  sws_key = {};
+  draining = false;
+  pending = false;
 
   AVFormatContext* raw_format = nullptr;
   const int opened = avformat_open_input(&raw_format, path.c_str(), nullptr, nullptr);
@@ -195,14 +198,14 @@ VideoDecoder::VideoDecoder(const std::filesystem::path& path, const VideoDecoder
                                  "container FFmpeg cannot read",
                                  path.string(), AvErrorText(opened)));
   }
-  d.format.reset(raw_format);
-  if (avformat_find_stream_info(d.format.get(), nullptr) < 0) {
+  format.reset(raw_format);
+  if (avformat_find_stream_info(format.get(), nullptr) < 0) {
     throw InputError(fmt::format("cannot read the streams of '{}': not a video file",
                                  path.string()));
   }
   const AVCodec* decoder = nullptr;
   const int stream_index =
-      av_find_best_stream(d.format.get(), AVMEDIA_TYPE_VIDEO, -1, -1, &decoder, 0);
+      av_find_best_stream(format.get(), AVMEDIA_TYPE_VIDEO, -1, -1, &decoder, 0);
   if (stream_index == AVERROR_DECODER_NOT_FOUND) {
     throw InputError(fmt::format("'{}' has a video stream in a codec FFmpeg cannot decode here",
                                  path.string()));
@@ -210,33 +213,45 @@ VideoDecoder::VideoDecoder(const std::filesystem::path& path, const VideoDecoder
   if (stream_index < 0 || decoder == nullptr) {
     throw InputError(fmt::format("'{}' has no video stream", path.string()));
   }
-  d.stream = d.format->streams[stream_index];
+  stream = format->streams[stream_index];
   // Only our stream's packets are demuxed in full; the others (audio, telemetry) are dropped.
-  for (unsigned i = 0; i < d.format->nb_streams; ++i) {
-    if (static_cast<int>(i) != stream_index) d.format->streams[i]->discard = AVDISCARD_ALL;
+  for (unsigned i = 0; i < format->nb_streams; ++i) {
+    if (static_cast<int>(i) != stream_index) format->streams[i]->discard = AVDISCARD_ALL;
   }
 
-  d.codec.reset(avcodec_alloc_context3(decoder));
-  if (!d.codec) throw EnvironmentError("out of memory allocating a video decoder");
-  if (avcodec_parameters_to_context(d.codec.get(), d.stream->codecpar) < 0) {
+  codec.reset(avcodec_alloc_context3(decoder));
+  if (!codec) throw EnvironmentError("out of memory allocating a video decoder");
+  if (avcodec_parameters_to_context(codec.get(), stream->codecpar) < 0) {
     throw InputError(fmt::format("'{}': unusable video stream parameters", path.string()));
   }
-  d.codec->thread_count = options.threads;
-  const int codec_opened = avcodec_open2(d.codec.get(), decoder, nullptr);
+  codec->thread_count = threads;
+  const int codec_opened = avcodec_open2(codec.get(), decoder, nullptr);
   if (codec_opened < 0) {
     throw InputError(fmt::format("cannot start the {} decoder for '{}': {}", decoder->name,
                                  path.string(), AvErrorText(codec_opened)));
   }
 
   // The display matrix holds the counter-clockwise rotation of the stored picture.
-  const uint8_t* matrix = av_stream_get_side_data(d.stream, AV_PKT_DATA_DISPLAYMATRIX, nullptr);
+  rotation_cw_deg = 0;
+  const uint8_t* matrix = av_stream_get_side_data(stream, AV_PKT_DATA_DISPLAYMATRIX, nullptr);
   if (matrix != nullptr) {
     const double ccw = av_display_rotation_get(reinterpret_cast<const int32_t*>(matrix));
     if (std::isfinite(ccw)) {
       const int quarter = static_cast<int>(std::lround(-ccw / 90.0));
-      d.rotation_cw_deg = ((quarter % 4 + 4) % 4) * 90;
+      rotation_cw_deg = ((quarter % 4 + 4) % 4) * 90;
     }
   }
+}
+
+VideoDecoder::VideoDecoder(const std::filesystem::path& path, const VideoDecoderOptions& options)
+    : impl_(std::make_unique<Impl>()) {
+  options.Check();
+  InstallLibavLogCallback();
+  Impl& d = *impl_;
+  d.path = path;
+  d.threads = options.threads;
+  if (!d.frame || !d.packet) throw EnvironmentError("out of memory allocating a video frame");
+  d.Open();
 }
 
 VideoDecoder::~VideoDecoder() = default;
@@ -335,19 +350,20 @@ bool VideoDecoder::Seek(int64_t target) {
   if (index_ < 0 && !Grab()) return false;
   const bool timed = d.first_pts != AV_NOPTS_VALUE && rate > 0.0;
 
-  // Seek some frames before the target (the container's index maps a time to the key frame
-  // at or before it, but a time rounded up could land just after), further back each time the
-  // decoder lands behind the target.
+  // Seek some frames before the target: the container maps a time to the key frame at or
+  // before it where it has an index (MP4, MKV), but without one (MPEG-TS) the decoder may only
+  // start at the next key frame after it, so go further back while it lands behind the target.
   for (int64_t back = 16; timed; back *= 2) {
     const int64_t start = std::max<int64_t>(0, target - back);
     const double start_s = static_cast<double>(start) / rate;
     const int64_t pts =
         d.first_pts + static_cast<int64_t>(std::llround(start_s / av_q2d(d.stream->time_base)));
-    if (!d.SeekToTimestamp(pts) || !d.DecodeFrame()) break;
-    const int64_t landed = d.FrameTimestamp();
-    if (landed == AV_NOPTS_VALUE) break;
-    int64_t at = d.IndexOfPts(landed, rate);
-    if (at > target) {
+    if (!d.SeekToTimestamp(pts)) break;  // the container cannot seek
+    const bool decoded = d.DecodeFrame();
+    const int64_t landed = decoded ? d.FrameTimestamp() : AV_NOPTS_VALUE;
+    if (decoded && landed == AV_NOPTS_VALUE) break;  // no timestamps to count by
+    int64_t at = decoded ? d.IndexOfPts(landed, rate) : target + 1;
+    if (at > target) {  // behind the target, or past the end
       if (start == 0) break;
       continue;
     }
@@ -363,15 +379,10 @@ bool VideoDecoder::Seek(int64_t target) {
     return true;
   }
 
-  // No usable timestamps (or the container cannot seek): decode from the start and count.
-  if (!d.SeekToTimestamp(d.first_pts != AV_NOPTS_VALUE ? d.first_pts : 0)) {
-    if (avformat_seek_file(d.format.get(), -1, INT64_MIN, 0, INT64_MAX, AVSEEK_FLAG_BYTE) < 0) {
-      throw EnvironmentError(fmt::format("'{}': the decoder cannot seek", d.path.string()));
-    }
-    avcodec_flush_buffers(d.codec.get());
-    d.draining = false;
-    d.pending = false;
-  }
+  // No usable timestamps, or no seek lands at or before the target: open the file again and
+  // count frames from the start (slow for a far target, but exact).
+  GLAM_LOG_DEBUG("'{}': seeking to frame {} by decoding from the start", d.path.string(), target);
+  d.Open();
   for (int64_t at = 0;; ++at) {
     if (!d.DecodeFrame()) {
       index_ = at - 1;  // the last frame there is

@@ -175,13 +175,16 @@ TEST_F(VideoDecoderTest, TenBitHevcSeeksExactly) {
 }
 
 // Other containers and codecs users upload: VP9 in Matroska (timestamps in milliseconds, not
-// frames), MPEG-4 Part 2 with B-frames in AVI, 10-bit 4:2:2 ProRes in QuickTime.
+// frames), MPEG-4 Part 2 with B-frames in AVI, 10-bit 4:2:2 ProRes in QuickTime, H.264 in an
+// MPEG transport stream.
 TEST_F(VideoDecoderTest, OtherContainersAndCodecsSeekExactly) {
   if (!HaveFfmpeg()) GTEST_SKIP() << "ffmpeg binary not available";
   const std::vector<std::pair<std::string, std::string>> formats = {
       {"vp9.mkv", "-c:v libvpx-vp9 -crf 10 -b:v 0 -deadline realtime -cpu-used 8 -g 24"},
       {"mpeg4.avi", "-c:v mpeg4 -q:v 2 -bf 2 -g 24"},
       {"prores.mov", "-c:v prores_ks -profile:v 2 -pix_fmt yuv422p10le"},
+      // MPEG-TS (live recordings): no frame count, 90 kHz clock starting at ~1.4 s.
+      {"h264.ts", "-c:v libx264 -preset ultrafast -bf 2 -g 24 -qp 10 -pix_fmt yuv420p"},
   };
   for (const auto& [name, encode] : formats) {
     SCOPED_TRACE(name);
