@@ -129,9 +129,8 @@ bool VideoDecoder::Impl::DecodeFrame() {
     if (received == AVERROR_EOF) return false;
     if (received != AVERROR(EAGAIN)) {
       GLAM_LOG_DEBUG("'{}': decoder error {}", path.string(), AvErrorText(received));
-      if (draining) return false;
     }
-    if (draining) return false;
+    if (draining) return false;  // nothing more to give it
     // The decoder wants input: the next packet of our stream, skipping those it rejects
     // (a corrupt packet costs its frame, not the rest of the video).
     for (;;) {
@@ -319,7 +318,7 @@ void VideoDecoder::Retrieve(cv::Size size, cv::Mat* bgr) {
   }
   SwsContext* sws = d.sws.get();
   if (sws == nullptr) {
-    throw EnvironmentError(fmt::format("'{}': cannot convert {} frames of {}x{} to BGR",
+    throw InputError(fmt::format("'{}': cannot convert {} frames of {}x{} to BGR",
                                        d.path.string(),
                                        av_get_pix_fmt_name(source_format) != nullptr
                                            ? av_get_pix_fmt_name(source_format)

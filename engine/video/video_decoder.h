@@ -58,7 +58,8 @@ class VideoDecoder {
   // Size of the grabbed frame as displayed (after the stream's rotation); empty before Grab().
   cv::Size display_size() const;
   // The grabbed frame as 8-bit BGR scaled to `size` (display orientation), area-filtered when
-  // downscaling. Requires a successful Grab().
+  // downscaling. Requires a successful Grab(). Throws InputError for a pixel format swscale
+  // cannot convert.
   void Retrieve(cv::Size size, cv::Mat* bgr);
 
   // Prepares the decoder so that the next Grab() yields frame `index`: seeks to the key frame

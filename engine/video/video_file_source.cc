@@ -54,6 +54,8 @@ VideoFileSource::VideoFileSource(const std::filesystem::path& path,
   info_.original_size = decoder_->display_size();
   info_.processing_size = ProcessingSize(info_.original_size, options_.max_image_size);
   info_.scale = static_cast<double>(info_.processing_size.width) / info_.original_size.width;
+  // Converted now so that a pixel format we cannot convert fails the probe, not the job.
+  decoder_->Retrieve(info_.processing_size, &first_bgr_);
   GLAM_LOG_DEBUG("opened video '{}': {}x{} @ {:.3f} fps, ~{} frames, processing {}x{}",
                  path.string(), info_.original_size.width, info_.original_size.height, info_.fps,
                  info_.frame_count, info_.processing_size.width, info_.processing_size.height);
@@ -89,7 +91,12 @@ std::optional<Frame> VideoFileSource::Next() {
   frame.index = next_index_;
   frame.timestamp_s = static_cast<double>(next_index_) / info_.fps;
   frame.original_size = decoder_->display_size();
-  decoder_->Retrieve(info_.processing_size, &frame.bgr);
+  if (first) {
+    frame.bgr = first_bgr_;
+  } else {
+    decoder_->Retrieve(info_.processing_size, &frame.bgr);
+  }
+  first_bgr_.release();
   next_index_ += options_.stride;
   ++delivered_;
   return frame;
@@ -106,6 +113,7 @@ void VideoFileSource::SeekTo(int64_t index) {
   if (first_pending_ && index == 0) return;
   if (index >= position_ && index - position_ <= kMaxGrabSeek) return;  // grab forward
   first_pending_ = false;
+  first_bgr_.release();
   if (!decoder_->Seek(index)) {  // the stream ends before `index`
     position_ = decoder_->index() + 1;
     MarkEnd();

@@ -33,6 +33,7 @@ class VideoFileSource : public FrameSource {
   std::unique_ptr<VideoDecoder> decoder_;
   FrameSourceInfo info_;
   bool first_pending_ = false;  // frame 0, decoded at open, is the decoder's current frame
+  cv::Mat first_bgr_;           // frame 0 converted at open (while first_pending_)
   int64_t position_ = 0;        // index of the frame the decoder produces next
   int64_t next_index_ = 0;     // index Next() delivers next
   int64_t delivered_ = 0;
