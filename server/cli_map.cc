@@ -139,7 +139,7 @@ void RegisterMapCommand(CLI::App& app) {
       "map", "Build submaps, align them (loop closure) and write trajectory.tum, points.ply, "
              "report.json and graph.json from a video or image folder (parts of the flight that "
              "cannot be linked to the map: parts/<n>/trajectory.tum and points.ply)");
-  cmd->add_option("input", args->input, "Video file (MP4/MOV/MKV) or folder of images")->required();
+  cmd->add_option("input", args->input, "Video file (anything FFmpeg decodes: MP4/MOV/MKV/TS/AVI, H.264/H.265/VP9/AV1/ProRes) or folder of images")->required();
   cmd->add_option("--out", args->out, "Output directory")->required();
   cmd->add_option("--intrinsics", args->intrinsics_path,
                   "intrinsics.json at the input's original resolution (a calibration: its focal is "
