@@ -3,14 +3,15 @@
 // single swscale pass.
 //
 // Why not cv::VideoCapture (which GLAM used before): it converts every frame to full-size BGR
-// before the caller can downscale it. Drone footage is mostly 4K; there the full-size
-// conversion (~15 ms of CPU per frame for 10-bit H.265) plus the 4K -> 1280x720 resize (~15 ms)
-// cost as much as a third of the decoding itself. Scaling and converting in one pass from the
-// decoder's YUV planes costs ~3 ms. Below the processing size nothing changes.
+// before the caller can downscale it. Drone footage is mostly 4K; for 10-bit H.265 the
+// full-size conversion plus the 4K -> 1280x720 resize took ~38 ms of CPU per frame on top of
+// ~55 ms of decoding; converting and scaling in one swscale pass from the decoder's YUV planes
+// takes ~11 ms (build/bench/glam_bench_video_decode, docs/benchmarks.md). At the processing
+// size itself nothing changes.
 //
 // What the class keeps from the OpenCV backend, because the rest of GLAM and its users rely on
-// it: frames are counted from the first decoded frame (index = decode order of presentation),
-// seeks land exactly on the asked frame (seek to the key frame before it, decode forward), the
+// it: frames are numbered in presentation order from the first decoded frame, seeks land
+// exactly on the asked frame (seek to the key frame before it, decode forward), the
 // display rotation stored by phones and some drones is applied, and an undecodable packet is
 // skipped rather than ending the stream (the caller compares the frames it got with the
 // container's frame count to tell a truncated file).

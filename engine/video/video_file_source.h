@@ -4,9 +4,8 @@
 #pragma once
 
 #include <filesystem>
-#include <optional>
-
 #include <memory>
+#include <optional>
 
 #include "engine/video/frame_source.h"
 #include "engine/video/video_decoder.h"
@@ -35,7 +34,7 @@ class VideoFileSource : public FrameSource {
   bool first_pending_ = false;  // frame 0, decoded at open, is the decoder's current frame
   cv::Mat first_bgr_;           // frame 0 converted at open (while first_pending_)
   int64_t position_ = 0;        // index of the frame the decoder produces next
-  int64_t next_index_ = 0;     // index Next() delivers next
+  int64_t next_index_ = 0;      // index Next() delivers next
   int64_t delivered_ = 0;
   bool done_ = false;
   bool ended_early_ = false;

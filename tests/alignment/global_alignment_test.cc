@@ -13,7 +13,6 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "tests/support/temp_dir.h"
 #include "engine/core/intrinsics_io.h"
 #include "engine/core/logging.h"
 #include "engine/core/sim3.h"
@@ -21,6 +20,7 @@
 #include "engine/map/submap_io.h"
 #include "engine/pipeline/mapping_job.h"
 #include "tests/export/glb_test_util.h"
+#include "tests/support/temp_dir.h"
 #include "tools/eval/evaluation.h"
 #include "tools/eval/ground_truth_surface.h"
 #include "tools/eval/map_metrics.h"

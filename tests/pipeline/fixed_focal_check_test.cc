@@ -9,10 +9,10 @@
 
 #include <gtest/gtest.h>
 
-#include "tests/support/temp_dir.h"
 #include "engine/core/intrinsics_io.h"
 #include "engine/pipeline/mapping_job.h"
 #include "engine/pipeline/mapping_report.h"
+#include "tests/support/temp_dir.h"
 
 namespace glam {
 namespace {

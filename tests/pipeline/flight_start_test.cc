@@ -12,10 +12,10 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "tests/support/temp_dir.h"
 #include "engine/core/intrinsics_io.h"
 #include "engine/pipeline/mapping_job.h"
 #include "engine/pipeline/mapping_options.h"
+#include "tests/support/temp_dir.h"
 #include "tools/eval/evaluation.h"
 
 namespace glam {

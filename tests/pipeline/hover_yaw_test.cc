@@ -12,8 +12,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "tests/support/temp_dir.h"
 #include "engine/pipeline/mapping_job.h"
+#include "tests/support/temp_dir.h"
 #include "tools/eval/evaluation.h"
 
 namespace glam {

@@ -10,11 +10,11 @@
 
 #include <gtest/gtest.h>
 
-#include "tests/support/temp_dir.h"
 #include "engine/core/intrinsics_io.h"
 #include "engine/export/tum_trajectory.h"
 #include "engine/pipeline/mapping_job.h"
 #include "engine/pipeline/mapping_options.h"
+#include "tests/support/temp_dir.h"
 #include "tools/eval/evaluation.h"
 
 namespace glam {
