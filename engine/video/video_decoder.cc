@@ -366,30 +366,29 @@ bool VideoDecoder::Seek(int64_t target) {
       if (start == 0) break;
       continue;
     }
-    while (at < target) {
-      if (!d.DecodeFrame()) {
-        index_ = at;  // the last frame there is
-        return false;
-      }
-      ++at;
-    }
-    d.pending = true;
-    index_ = target - 1;
-    return true;
+    return DecodeForwardTo(at, target);
   }
 
   // No usable timestamps, or no seek lands at or before the target: open the file again and
   // count frames from the start (slow for a far target, but exact).
   GLAM_LOG_DEBUG("'{}': seeking to frame {} by decoding from the start", d.path.string(), target);
   d.Open();
-  for (int64_t at = 0;; ++at) {
+  if (!d.DecodeFrame()) {
+    index_ = -1;
+    return false;
+  }
+  return DecodeForwardTo(0, target);
+}
+
+bool VideoDecoder::DecodeForwardTo(int64_t at, int64_t target) {
+  Impl& d = *impl_;
+  for (; at < target; ++at) {
     if (!d.DecodeFrame()) {
-      index_ = at - 1;  // the last frame there is
+      index_ = at;  // the last frame there is
       return false;
     }
-    if (at == target) break;
   }
-  d.pending = true;
+  d.pending = true;  // the next Grab() delivers it
   index_ = target - 1;
   return true;
 }

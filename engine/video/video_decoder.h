@@ -69,6 +69,10 @@ class VideoDecoder {
   bool Seek(int64_t index);
 
  private:
+  // With frame `at` decoded (at <= target), decodes up to frame `target` and leaves it for the
+  // next Grab(); false when the stream ends first.
+  bool DecodeForwardTo(int64_t at, int64_t target);
+
   struct Impl;
   std::unique_ptr<Impl> impl_;
   int64_t index_ = -1;

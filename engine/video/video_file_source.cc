@@ -41,7 +41,6 @@ VideoFileSource::VideoFileSource(const std::filesystem::path& path,
   if (!decoder_->Grab()) {
     throw InputError(fmt::format("video '{}' contains no decodable frames", path.string()));
   }
-  first_pending_ = true;
   position_ = 1;
 
   info_.fps = decoder_->fps();
@@ -74,7 +73,7 @@ void VideoFileSource::MarkEnd() {
 
 std::optional<Frame> VideoFileSource::Next() {
   if (done_) return std::nullopt;
-  const bool first = next_index_ == 0 && first_pending_;  // decoded at open
+  const bool first = next_index_ == 0 && !first_bgr_.empty();  // converted at open
   if (!first) {
     // Frames before the one asked for are decoded but not converted.
     while (position_ <= next_index_) {
@@ -85,7 +84,6 @@ std::optional<Frame> VideoFileSource::Next() {
       ++position_;
     }
   }
-  first_pending_ = false;
 
   Frame frame;
   frame.index = next_index_;
@@ -110,9 +108,8 @@ void VideoFileSource::SeekTo(int64_t index) {
   next_index_ = index;
   done_ = info_.frame_count > 0 && index == info_.frame_count;  // at the end: nothing left
   if (done_) return;
-  if (first_pending_ && index == 0) return;
+  if (!first_bgr_.empty() && index == 0) return;
   if (index >= position_ && index - position_ <= kMaxGrabSeek) return;  // grab forward
-  first_pending_ = false;
   first_bgr_.release();
   if (!decoder_->Seek(index)) {  // the stream ends before `index`
     position_ = decoder_->index() + 1;

@@ -31,8 +31,9 @@ class VideoFileSource : public FrameSource {
   FrameSourceOptions options_;
   std::unique_ptr<VideoDecoder> decoder_;
   FrameSourceInfo info_;
-  bool first_pending_ = false;  // frame 0, decoded at open, is the decoder's current frame
-  cv::Mat first_bgr_;           // frame 0 converted at open (while first_pending_)
+  // Frame 0, decoded and converted at open, until it is delivered or a seek moves away from
+  // it (empty afterwards: the decoder's current frame is then another one).
+  cv::Mat first_bgr_;
   int64_t position_ = 0;        // index of the frame the decoder produces next
   int64_t next_index_ = 0;      // index Next() delivers next
   int64_t delivered_ = 0;
