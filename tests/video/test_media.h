@@ -53,15 +53,21 @@ inline void WriteAvi(const std::filesystem::path& path, cv::Size size, int frame
 
 inline bool HaveFfmpeg() { return std::system("ffmpeg -version > /dev/null 2>&1") == 0; }
 
-// A video encoded by the ffmpeg binary from an AVI written with WriteAvi; `encode` holds the
-// output options (codec, pixel format, GOP, metadata).
+// Runs the ffmpeg binary on `input`, writing `output` with the output options `encode`
+// (codec, pixel format, GOP, metadata; extra inputs may come first). True on success.
+inline bool TranscodeWithFfmpeg(const std::filesystem::path& input,
+                                const std::filesystem::path& output, const std::string& encode) {
+  const std::string cmd = "ffmpeg -nostdin -v error -y -i '" + input.string() + "' " + encode +
+                          " '" + output.string() + "'";
+  return std::system(cmd.c_str()) == 0;
+}
+
+// A video encoded by the ffmpeg binary from an AVI written with WriteAvi.
 inline bool WriteWithFfmpeg(const std::filesystem::path& path, cv::Size size, int frames,
                             double fps, const std::string& encode) {
   const auto avi = path.parent_path() / (path.stem().string() + "_src.avi");
   WriteAvi(avi, size, frames, fps);
-  const std::string cmd = "ffmpeg -nostdin -v error -y -i '" + avi.string() + "' " + encode +
-                          " '" + path.string() + "'";
-  return std::system(cmd.c_str()) == 0;
+  return TranscodeWithFfmpeg(avi, path, encode);
 }
 
 // H.264 MP4 (moov atom first, as streaming-friendly encoders write it).

@@ -62,10 +62,8 @@ TEST_F(VideoDecoderTest, FramesMatchOpenCvsDecoderAtFullAndReducedSize) {
   const auto avi = dir_ / "textured.avi";
   WriteTexturedAvi(avi, {640, 360}, 12);
   const auto mp4 = dir_ / "textured.mp4";
-  const std::string cmd = "ffmpeg -nostdin -v error -y -i '" + avi.string() +
-                          "' -c:v libx264 -preset ultrafast -qp 4 -pix_fmt yuv420p '" +
-                          mp4.string() + "'";
-  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  ASSERT_TRUE(testing::TranscodeWithFfmpeg(avi, mp4,
+                                           "-c:v libx264 -preset ultrafast -qp 4 -pix_fmt yuv420p"));
 
   for (const auto& path : {avi, mp4}) {   // full-range Motion-JPEG and limited-range H.264
     for (const int max_size : {0, 320, 200}) {
@@ -108,10 +106,8 @@ TEST_F(VideoDecoderTest, DisplayRotationIsApplied) {
   for (const auto& [degrees, code] : rotations) {
     SCOPED_TRACE("rotate=" + std::to_string(degrees));
     const auto rotated = dir_ / ("rotated" + std::to_string(degrees) + ".mp4");
-    const std::string cmd = "ffmpeg -nostdin -v error -y -i '" + plain.string() +
-                            "' -c copy -metadata:s:v:0 rotate=" + std::to_string(degrees) +
-                            " '" + rotated.string() + "'";
-    ASSERT_EQ(std::system(cmd.c_str()), 0);
+    ASSERT_TRUE(testing::TranscodeWithFfmpeg(
+        plain, rotated, "-c copy -metadata:s:v:0 rotate=" + std::to_string(degrees)));
 
     auto source = OpenFrameSource(rotated);
     const cv::Size upright = degrees == 180 ? cv::Size(320, 180) : cv::Size(180, 320);
