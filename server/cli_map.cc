@@ -68,7 +68,7 @@ void DrawProgress(const MappingProgress& p, bool tty) {
   const double fraction =
       p.frames_total > 0 ? std::min(1.0, static_cast<double>(p.frames_done) / p.frames_total) : 0;
   const int filled = static_cast<int>(fraction * kWidth);
-  std::cerr << fmt::format("\r\033[K{:<7} [{}{}] {:3.0f}%  {}", p.stage, std::string(filled, '#'),
+  std::cerr << fmt::format("\r\033[K{:<8} [{}{}] {:3.0f}%  {}", p.stage, std::string(filled, '#'),
                            std::string(kWidth - filled, '.'), 100 * fraction, tail)
             << std::flush;
 }

@@ -19,4 +19,11 @@ struct LandmarkMatch {
   Eigen::Vector3d point_in_b{0, 0, 0};
 };
 
+// One member of a landmark matched across submaps: Landmark::id `landmark` of submap `submap`
+// (SubmapAligner::LandmarkGroups, global_refinement.h).
+struct LandmarkKey {
+  std::uint32_t submap = 0;
+  std::uint32_t landmark = 0;
+};
+
 }  // namespace glam

@@ -408,4 +408,16 @@ nlohmann::json SubmapAligner::GraphJson() const {
           {"edges", edges}};
 }
 
+std::vector<std::vector<LandmarkKey>> SubmapAligner::LandmarkGroups() const {
+  std::vector<std::vector<LandmarkKey>> groups;
+  for (const auto& members : graph_->LandmarkMembers()) {
+    std::vector<LandmarkKey> group;
+    for (const auto& [submap, landmark] : members) {
+      if (landmark < kSharedFrameIdBase) group.push_back({submap, landmark});
+    }
+    if (group.size() >= 2) groups.push_back(std::move(group));
+  }
+  return groups;
+}
+
 }  // namespace glam

@@ -117,6 +117,9 @@ class SubmapAligner {
   const std::vector<AlignmentEdge>& edges() const { return edges_; }
   const std::vector<SubmapAlignmentTiming>& timings() const { return timings_; }
   std::size_t graph_landmarks() const { return graph_->num_landmarks(); }
+  // The main map's ground points matched across submaps, each as its members (the frames'
+  // pseudo-landmarks of shared_frames.h left out): the tracks global_refinement.h joins.
+  std::vector<std::vector<LandmarkKey>> LandmarkGroups() const;
   // graph.json: nodes (placement, frames, disconnected), edges (kind, score, inliers, Sim3).
   nlohmann::json GraphJson() const;
 

@@ -363,4 +363,15 @@ std::vector<GraphLandmark> SubmapGraph::Landmarks() const {
   return out;
 }
 
+std::vector<std::vector<std::pair<std::uint32_t, std::uint32_t>>> SubmapGraph::LandmarkMembers() const {
+  std::vector<std::vector<std::pair<std::uint32_t, std::uint32_t>>> out;
+  out.reserve(num_landmarks_);
+  for (const auto& node : landmarks_) {
+    if (!node) continue;
+    auto& members = out.emplace_back();
+    for (const Observation& o : node->observations) members.emplace_back(o.submap, o.landmark);
+  }
+  return out;
+}
+
 }  // namespace glam

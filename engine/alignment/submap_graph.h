@@ -37,6 +37,7 @@
 #include <span>
 #include <string_view>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -141,6 +142,9 @@ class SubmapGraph {
   bool HasSubmap(std::uint32_t id) const;
   std::vector<std::uint32_t> submap_ids() const;  // ascending
   std::vector<GraphLandmark> Landmarks() const;
+  // Every landmark node's members, (submap id, landmark id) each: the ground points matched
+  // across submaps (global_refinement.h joins their tracks).
+  std::vector<std::vector<std::pair<std::uint32_t, std::uint32_t>>> LandmarkMembers() const;
 
   std::size_t num_submaps() const { return submaps_.size(); }
   std::size_t num_landmarks() const { return num_landmarks_; }

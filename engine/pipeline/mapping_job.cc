@@ -28,6 +28,7 @@
 #include "engine/geo/gps_track.h"
 #include "engine/pipeline/georeference_map.h"
 #include "engine/pipeline/live_georeference.h"
+#include "engine/pipeline/map_refinement.h"
 #include "engine/pipeline/map_export.h"
 #include "engine/pipeline/resume_checkpoint.h"
 #include "engine/pipeline/tile_writer.h"
@@ -372,6 +373,17 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   emit(true);
   const auto write_start = Clock::now();
   std::shared_ptr<const MapSnapshot> snapshot = aligner.snapshot();
+  {
+    state.stage = "refining";
+    emit(true);
+    MapRefinementResult refined = RefineFinishedMap(snapshot, aligner.LandmarkGroups(), submaps_root,
+                                                    tiles, options.global_refinement, cancel);
+    report.global_refinement = refined.summary;
+    report.timings.global_refinement_s = refined.summary.seconds;
+    snapshot = std::move(refined.snapshot);
+    state.stage = "writing";
+    emit(true);
+  }
   if (gps) {
     MapGeoreference geo = GeoreferenceMap(*snapshot, submaps_root, report.fps, *gps, options.georeference);
     report.georeference = geo.map;

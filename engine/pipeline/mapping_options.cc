@@ -15,6 +15,7 @@ void MappingOptions::Check() const {
   sift.Check();
   submap.Check();
   alignment.Check();
+  global_refinement.Check();
   if (intrinsics) intrinsics->Check();
   if (focal_px) CheckGreater("MappingOptions.focal_px", *focal_px, 0.0);
   CheckInRange("MappingOptions.default_focal_factor", default_focal_factor, 0.05, 20.0);
@@ -54,6 +55,7 @@ void UsePaperMethod(MappingOptions* options) {
   options->alignment.use_shared_frames = false;
   options->alignment.local_window = 0;
   options->alignment.max_demotable_submaps = 0;
+  options->global_refinement.enabled = false;
 }
 
 void UseCalibration(MappingOptions* options, const Intrinsics& intrinsics) {

@@ -13,6 +13,7 @@
 #include "engine/features/sift_extractor.h"
 #include <filesystem>
 
+#include "engine/alignment/global_refinement.h"
 #include "engine/alignment/submap_aligner.h"
 #include "engine/submap/submap_options.h"
 #include "engine/video/frame_source.h"
@@ -32,6 +33,9 @@ struct MappingOptions {
   SiftOptions sift;
   SubmapOptions submap;
   AlignerOptions alignment;
+  // After the last submap: one bundle adjustment of the whole map (engine/alignment/
+  // global_refinement.h), for maps of up to global_refinement.max_keyframes keyframes.
+  GlobalRefinementOptions global_refinement;
   // Vocabulary tree for finding overlapping submaps; empty = the one built into glam
   // (data/vocabulary/README.md says how it was trained).
   std::filesystem::path vocabulary;
@@ -90,7 +94,7 @@ inline constexpr double kAutoDetectionSeconds = 0.2;
 // the constant weak prior (no shared focal, no prior growth, no submap rebuild when the focal
 // moves), completion by PnP relocalisation only (no completion bundle adjustment), no
 // extension of a short final submap; thread 2 with landmark-only edges (no shared frames) and
-// whole-graph solves (no local window). Kept, because they have no paper counterpart to go
+// whole-graph solves (no local window); no global refinement at the end. Kept, because they have no paper counterpart to go
 // back to or the paper leaves them open: RootSIFT (the built-in vocabulary is trained on it),
 // the inlier thresholds' scaling with the feature count, the outlier filters' parameters, the
 // verifier's checks. For comparing against the paper (`glam map --paper`); slower (SIFT on every

@@ -14,6 +14,23 @@ nlohmann::json NullIfUnset(const std::optional<double>& value) {
   return value ? nlohmann::json(*value) : nlohmann::json();
 }
 
+nlohmann::json GlobalRefinementJson(const GlobalRefinementSummary& r) {
+  return {{"ran", r.ran},
+          {"applied", r.applied},
+          {"reason", r.reason},
+          {"submaps", r.submaps},
+          {"keyframes", r.keyframes},
+          {"shared_keyframes", r.shared_keyframes},
+          {"points", r.landmarks},
+          {"joined_points", r.joined_landmarks},
+          {"observations", r.observations},
+          {"initial_rms_px", r.initial_rms_pixels},
+          {"final_rms_px", r.final_rms_pixels},
+          {"max_camera_shift", r.max_camera_shift},
+          {"iterations", r.iterations},
+          {"seconds", r.seconds}};
+}
+
 // Per submap timings plus the summary a user looks for first: does thread 2 keep up?
 nlohmann::json AlignmentJson(const std::vector<SubmapAlignmentTiming>& timings) {
   nlohmann::json per_submap = nlohmann::json::array();
@@ -196,6 +213,7 @@ nlohmann::json MappingReport::ToJson() const {
           {"revision", revision},
           {"graph", {{"edges", graph_edges}, {"retrieved_edges", retrieved_edges}, {"landmarks", graph_landmarks}}},
           {"alignment", AlignmentJson(alignment)},
+          {"global_refinement", GlobalRefinementJson(global_refinement)},
           {"initial_focal_px", initial_focal},
           {"sift_max_features", sift_max_features},
           {"focal_px", focal},
@@ -220,6 +238,7 @@ nlohmann::json MappingReport::ToJson() const {
             {"builder", timings.builder_s},
             {"bundle_adjustment", timings.bundle_adjust_s},
             {"alignment", timings.alignment_s},
+            {"global_refinement", timings.global_refinement_s},
             {"writing", timings.writing_s},
             {"tiles", timings.tiles_s},
             {"total", timings.total_s}}}};

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "engine/alignment/submap_aligner.h"
+#include "engine/alignment/global_refinement.h"
 #include "engine/geo/georeference.h"
 #include "engine/pipeline/georeference_map.h"
 #include "engine/pipeline/map_export.h"
@@ -21,6 +22,7 @@ struct MappingTimings {
   double builder_s = 0;              // submap builder time, including BA
   double bundle_adjust_s = 0;        // of which bundle adjustment
   double alignment_s = 0;            // thread 2 busy time (retrieval, verification, graph)
+  double global_refinement_s = 0;    // the end-of-run joint bundle adjustment (map_refinement.h)
   double writing_s = 0;              // submaps, tiles and whole-map files
   double tiles_s = 0;                // of writing_s: encoding + writing the per-submap tiles
   double total_s = 0;
@@ -92,6 +94,8 @@ struct MappingReport {
   // The disconnected parts' own GPS fits (when the map was georeferenced): a part with an ok
   // fit was placed in the map by it (engine/pipeline/georeference_map.h).
   std::vector<GpsPlacedPart> georeferenced_parts;
+  // The end-of-run joint bundle adjustment of the whole map (engine/alignment/global_refinement.h).
+  GlobalRefinementSummary global_refinement;
   // Why frames or the whole input could not be mapped, in words for the user (also logged).
   // Bad footage (textureless, static, truncated) completes with these rather than failing:
   // the run did what the input allows, and the report says what is missing and why.

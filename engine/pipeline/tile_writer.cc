@@ -71,6 +71,12 @@ void TileWriter::OnSubmapCompleted(const Submap& submap) {
   GLAM_LOG_DEBUG("tile of submap {} written ({} points)", submap.id, submap.landmarks.size());
 }
 
+void TileWriter::OnSubmapsRefined(const std::vector<Submap>& submaps) {
+  std::lock_guard lock(mutex_);
+  for (const Submap& submap : submaps) WriteTiles(submap, false);
+  run_id_ += run_id_.empty() ? "refined" : "-refined";
+}
+
 void TileWriter::OnRevision(const MapSnapshot& snapshot) {
   std::lock_guard lock(mutex_);
   if (snapshot.revision <= last_revision_) return;

@@ -22,6 +22,8 @@
 #include <filesystem>
 #include <map>
 #include <mutex>
+#include <string>
+#include <vector>
 
 #include "engine/export/glb_tile.h"
 #include "engine/map/map_snapshot.h"
@@ -42,6 +44,11 @@ class TileWriter {
   // Writes tiles/<id>.glb and tiles/<id>.quantized.glb. An empty submap (no landmarks) gets
   // valid tiles without points; it has no child in the tileset.
   void OnSubmapCompleted(const Submap& submap);
+
+  // Rewrites the tiles of submaps whose contents changed after completion (the end-of-run
+  // global refinement, map_refinement.h) and gives every tile URI a new version, so clients
+  // that cached the old tiles (served as immutable) fetch them again with the next tileset.
+  void OnSubmapsRefined(const std::vector<Submap>& submaps);
 
   // Writes tileset.json and tileset.quantized.json for this snapshot unless a snapshot with
   // the same or a larger revision was written already (so calling it on every poll is cheap).

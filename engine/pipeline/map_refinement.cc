@@ -1,0 +1,57 @@
+#include "engine/pipeline/map_refinement.h"
+
+#include <utility>
+
+#include "engine/core/logging.h"
+#include "engine/map/submap_io.h"
+
+namespace glam {
+
+MapRefinementResult RefineFinishedMap(std::shared_ptr<const MapSnapshot> snapshot,
+                                      const std::vector<std::vector<LandmarkKey>>& groups,
+                                      const std::filesystem::path& submaps_root, TileWriter& tiles,
+                                      const GlobalRefinementOptions& options,
+                                      const CancellationToken& cancel) {
+  MapRefinementResult result;
+  result.snapshot = snapshot;
+  if (!options.enabled) {
+    result.summary.reason = "disabled";
+    return result;
+  }
+  std::vector<Submap> submaps;
+  std::vector<Sim3> world_from_submap;
+  std::size_t keyframes = 0;
+  for (const SubmapPlacement& placement : snapshot->submaps) {
+    if (placement.disconnected || placement.part != 0) continue;
+    submaps.push_back(ReadSubmap(submaps_root, placement.id));
+    world_from_submap.push_back(placement.world_from_submap);
+    keyframes += submaps.back().keyframes.size();
+    if (keyframes > static_cast<std::size_t>(options.max_keyframes)) {
+      result.summary.reason = fmt::format("more than {} keyframes in the map", options.max_keyframes);
+      GLAM_LOG_INFO("global refinement skipped: {}", result.summary.reason);
+      return result;
+    }
+  }
+  result.summary = RefineMapJointly(submaps, world_from_submap, groups, options, cancel);
+  if (!result.summary.applied) {
+    if (!result.summary.reason.empty()) {
+      GLAM_LOG_INFO("global refinement not applied: {}", result.summary.reason);
+    }
+    return result;
+  }
+  GLAM_LOG_INFO(
+      "global refinement: {} submaps, {} keyframes ({} shared), {} points ({} joined across "
+      "submaps), rms {:.3f} -> {:.3f} px, largest camera move {:.3g}, {} iterations, {:.2f} s",
+      result.summary.submaps, result.summary.keyframes, result.summary.shared_keyframes,
+      result.summary.landmarks, result.summary.joined_landmarks, result.summary.initial_rms_pixels,
+      result.summary.final_rms_pixels, result.summary.max_camera_shift, result.summary.iterations,
+      result.summary.seconds);
+  for (const Submap& submap : submaps) WriteSubmap(submap, submaps_root);
+  tiles.OnSubmapsRefined(submaps);
+  auto refined = std::make_shared<MapSnapshot>(*snapshot);
+  refined->revision = snapshot->revision + 1;
+  result.snapshot = std::move(refined);
+  return result;
+}
+
+}  // namespace glam
