@@ -190,6 +190,11 @@ void RegisterMapCommand(CLI::App& app) {
                   "quadratic fit; rotations re-solved), which removes the sideways jitter of "
                   "compressed footage; 0 = per-frame PnP poses (the paper)")
       ->capture_default_str();
+  cmd->add_option("--global-refinement-keyframes", args->options.global_refinement.max_keyframes,
+                  "After the last submap, one bundle adjustment of the whole map (tracks joined "
+                  "across submaps) when it has at most this many keyframes; 0 = never (the paper: "
+                  "submaps stay rigid)")
+      ->capture_default_str();
   cmd->add_option("--feature-workers", args->options.feature_workers,
                   "Frames whose SIFT features are extracted in parallel")
       ->capture_default_str();
@@ -224,7 +229,7 @@ void RegisterMapCommand(CLI::App& app) {
       "adjustment, ...; docs/algorithm.md); slower");
   for (const char* name : {"--detect-every", "--feature-grid", "--keyframe-parallax", "--keyframe-coverage",
                            "--bootstrap-parallax", "--completion-ba-frames", "--smooth-window",
-                           "--per-keyframe-focal"}) {
+                           "--per-keyframe-focal", "--global-refinement-keyframes"}) {
     paper->excludes(name);
   }
   cmd->add_flag("--resume", args->options.resume,

@@ -115,8 +115,9 @@ BundleAdjustmentOptions GlobalRefinementOptions::DefaultBundleAdjustment() {
 }
 
 void GlobalRefinementOptions::Check() const {
-  CheckGreaterEqual("GlobalRefinementOptions.max_keyframes", max_keyframes, 2);
+  CheckGreaterEqual("GlobalRefinementOptions.max_keyframes", max_keyframes, 0);
   CheckGreater("GlobalRefinementOptions.max_camera_shift_fraction", max_camera_shift_fraction, 0.0);
+  CheckGreater("GlobalRefinementOptions.max_joined_error_px", max_joined_error_px, 0.0);
   bundle_adjustment.Check();
   if (bundle_adjustment.refine_focal || bundle_adjustment.refine_k1 ||
       bundle_adjustment.fixed_keyframes < 1 || !bundle_adjustment.fix_scale) {
@@ -139,8 +140,8 @@ GlobalRefinementSummary RefineMapJointly(std::vector<Submap>& submaps,
   summary.submaps = static_cast<int>(submaps.size());
   std::size_t total_keyframes = 0;
   for (const Submap& submap : submaps) total_keyframes += submap.keyframes.size();
-  if (!options.enabled) {
-    summary.reason = "disabled";
+  if (options.max_keyframes == 0) {
+    summary.reason = "off";
     return summary;
   }
   if (submaps.size() < 2) {
@@ -182,35 +183,9 @@ GlobalRefinementSummary RefineMapJointly(std::vector<Submap>& submaps,
       index_of_id[i][submaps[i].landmarks[l].id] = l;
     }
   }
-  std::vector<Landmark> points;
   std::vector<std::vector<Member>> members_of_point;
   std::vector<std::vector<bool>> grouped(submaps.size());
   for (std::size_t i = 0; i < submaps.size(); ++i) grouped[i].assign(submaps[i].landmarks.size(), false);
-  const auto add_point = [&](const std::vector<Member>& members) {
-    Landmark point;
-    point.id = static_cast<std::uint32_t>(points.size());
-    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    for (const Member& m : members) {
-      const Submap& submap = submaps[m.submap];
-      const Landmark& landmark = submap.landmarks[m.landmark];
-      sum += world_from_submap[m.submap] * landmark.point_in_submap;
-      for (const Observation& o : landmark.observations) {
-        const std::size_t camera = camera_of_keyframe[m.submap][o.keyframe];
-        const bool seen = std::any_of(point.observations.begin(), point.observations.end(),
-                                      [camera](const Observation& p) { return p.keyframe == camera; });
-        if (seen) continue;  // a joined keyframe: one observation per camera
-        Eigen::Vector2f pixel = o.pixel;
-        if (!SameLensModel(submap.intrinsics, lens)) {
-          pixel = RemapPixel(submap.intrinsics, lens, submap.keyframes[o.keyframe].focal, pixel);
-        }
-        point.observations.push_back({static_cast<std::uint32_t>(camera), pixel});
-      }
-    }
-    point.point_in_submap = sum / static_cast<double>(members.size());
-    summary.observations += static_cast<int>(point.observations.size());
-    points.push_back(std::move(point));
-    members_of_point.push_back(members);
-  };
   for (const std::vector<LandmarkKey>& group : groups) {
     std::vector<Member> members;
     for (const LandmarkKey& key : group) {
@@ -222,17 +197,48 @@ GlobalRefinementSummary RefineMapJointly(std::vector<Submap>& submaps,
       grouped[s->second][l->second] = true;
       members.push_back({s->second, l->second});
     }
-    if (members.empty()) continue;
-    if (members.size() > 1) ++summary.joined_landmarks;
-    add_point(members);
+    if (!members.empty()) members_of_point.push_back(std::move(members));
   }
   for (std::size_t i = 0; i < submaps.size(); ++i) {
     for (std::size_t l = 0; l < submaps[i].landmarks.size(); ++l) {
-      if (!grouped[i][l]) add_point({{i, l}});
+      if (!grouped[i][l]) members_of_point.push_back({{i, l}});
     }
   }
-  summary.keyframes = static_cast<int>(cameras.size());
-  summary.landmarks = static_cast<int>(points.size());
+  const auto observations_of = [&](const Member& m) {
+    const Submap& submap = submaps[m.submap];
+    std::vector<Observation> out;
+    for (const Observation& o : submap.landmarks[m.landmark].observations) {
+      Eigen::Vector2f pixel = o.pixel;
+      if (!SameLensModel(submap.intrinsics, lens)) {
+        pixel = RemapPixel(submap.intrinsics, lens, submap.keyframes[o.keyframe].focal, pixel);
+      }
+      out.push_back({static_cast<std::uint32_t>(camera_of_keyframe[m.submap][o.keyframe]), pixel});
+    }
+    return out;
+  };
+  // The joint point of `members`: their observations (one per camera: a joined keyframe saw
+  // the point in both submaps) at the mean of their positions as the map placed them.
+  const auto make_point = [&](const std::vector<Member>& members) {
+    Landmark point;
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (const Member& m : members) {
+      sum += world_from_submap[m.submap] * submaps[m.submap].landmarks[m.landmark].point_in_submap;
+      for (const Observation& o : observations_of(m)) {
+        const bool seen = std::any_of(point.observations.begin(), point.observations.end(),
+                                      [&o](const Observation& p) { return p.keyframe == o.keyframe; });
+        if (!seen) point.observations.push_back(o);
+      }
+    }
+    point.point_in_submap = sum / static_cast<double>(members.size());
+    return point;
+  };
+  const auto make_points = [&] {
+    std::vector<Landmark> points;
+    points.reserve(members_of_point.size());
+    for (const auto& members : members_of_point) points.push_back(make_point(members));
+    return points;
+  };
+  std::vector<Landmark> points = make_points();
 
   // The map's median viewing depth, the unit of the shift check.
   std::vector<double> depths;
@@ -245,10 +251,56 @@ GlobalRefinementSummary RefineMapJointly(std::vector<Submap>& submaps,
   std::vector<Eigen::Vector3d> centres_before;
   for (const Keyframe& camera : cameras) centres_before.push_back(CentreInWorld(camera.cam_from_submap));
 
+  // The bundle adjuster's gauge (first camera fixed, scale through the largest coordinate of
+  // the second camera's translation) assumes the first camera at the origin: with it
+  // elsewhere, that coordinate can stay fixed while the map scales about the first camera.
+  // So the adjustment runs in the first camera's frame and the result is moved back.
+  const SE3 first_from_world = cameras.front().cam_from_submap;
+  const SE3 world_from_first = first_from_world.Inverse();
+  const auto adjust = [&] {
+    for (Keyframe& camera : cameras) camera.cam_from_submap = camera.cam_from_submap * world_from_first;
+    for (Landmark& point : points) point.point_in_submap = first_from_world * point.point_in_submap;
+    const BundleAdjustmentSummary result = BundleAdjust(lens, cameras, points, options.bundle_adjustment, cancel);
+    for (Keyframe& camera : cameras) camera.cam_from_submap = camera.cam_from_submap * first_from_world;
+    for (Landmark& point : points) point.point_in_submap = world_from_first * point.point_in_submap;
+    return result;
+  };
   summary.ran = true;
-  Intrinsics ba_lens = lens;
-  const BundleAdjustmentSummary ba =
-      BundleAdjust(ba_lens, cameras, points, options.bundle_adjustment, cancel);
+  BundleAdjustmentSummary ba = adjust();
+
+  // A join the adjusted map cannot explain was a wrong match (the graph accepts matches within
+  // 2 % of the viewing depth): its members become points of their own again, and the map is
+  // adjusted once more from where the first pass left the cameras.
+  std::vector<std::vector<Member>> split;
+  for (std::size_t p = 0; p < points.size(); ++p) {
+    if (members_of_point[p].size() < 2) continue;
+    bool consistent = true;
+    for (const Member& m : members_of_point[p]) {
+      double squared = 0;
+      const std::vector<Observation> seen = observations_of(m);
+      for (const Observation& o : seen) {
+        const double e = ReprojectionError(lens, cameras[o.keyframe], points[p].point_in_submap, o.pixel);
+        squared += e * e;
+      }
+      if (std::sqrt(squared / static_cast<double>(seen.size())) > options.max_joined_error_px) consistent = false;
+    }
+    if (!consistent) {
+      ++summary.split_landmarks;
+      for (std::size_t k = 1; k < members_of_point[p].size(); ++k) split.push_back({members_of_point[p][k]});
+      members_of_point[p].resize(1);
+    }
+  }
+  if (!split.empty()) {
+    members_of_point.insert(members_of_point.end(), split.begin(), split.end());
+    const double initial_rms = ba.initial_rms_pixels;
+    points = make_points();
+    ba = adjust();
+    ba.initial_rms_pixels = initial_rms;
+  }
+  for (const auto& members : members_of_point) summary.joined_landmarks += members.size() > 1 ? 1 : 0;
+  summary.keyframes = static_cast<int>(cameras.size());
+  summary.landmarks = static_cast<int>(points.size());
+  for (const Landmark& point : points) summary.observations += static_cast<int>(point.observations.size());
   summary.initial_rms_pixels = ba.initial_rms_pixels;
   summary.final_rms_pixels = ba.final_rms_pixels;
   summary.iterations = ba.iterations;
@@ -258,7 +310,7 @@ GlobalRefinementSummary RefineMapJointly(std::vector<Submap>& submaps,
   }
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
-  if (!std::isfinite(ba.final_rms_pixels) || ba.final_rms_pixels > ba.initial_rms_pixels * 1.001) {
+  if (!std::isfinite(ba.final_rms_pixels) || ba.final_rms_pixels > ba.initial_rms_pixels * 1.001 + 1e-6) {
     summary.reason = fmt::format("the adjustment did not lower the reprojection error ({:.3f} -> {:.3f} px)",
                                  ba.initial_rms_pixels, ba.final_rms_pixels);
     return summary;

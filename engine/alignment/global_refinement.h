@@ -34,9 +34,8 @@
 namespace glam {
 
 struct GlobalRefinementOptions {
-  bool enabled = true;
   // Above this many keyframes in the map the refinement is skipped (time and memory grow with
-  // the whole map; a 20-keyframe submap is ~300-600 frames of video at 30 fps).
+  // the whole map; a 20-keyframe submap is ~300-600 frames of video at 30 fps). 0 = off.
   int max_keyframes = 400;
   // Focal and k1 stay fixed (each keyframe keeps its submap's focal); sparse Schur solver.
   BundleAdjustmentOptions bundle_adjustment = DefaultBundleAdjustment();
@@ -44,6 +43,10 @@ struct GlobalRefinementOptions {
   // the solver fails) and no camera moved by more than this fraction of the map's median
   // viewing depth: a larger move means a wrong cross-submap match pulled the map apart.
   double max_camera_shift_fraction = 0.5;
+  // A point joined across submaps whose members' observations still reproject worse than this
+  // (rms, pixels) after the adjustment was a wrong match: its members are split into points of
+  // their own and the map adjusted once more. The submap filters' reprojection threshold.
+  double max_joined_error_px = 4.0;
 
   void Check() const;  // throws InputError
 
@@ -59,6 +62,7 @@ struct GlobalRefinementSummary {
   int shared_keyframes = 0;  // keyframes of the same frame in two submaps, joined
   int landmarks = 0;         // points in the adjustment
   int joined_landmarks = 0;  // points made of landmarks from several submaps
+  int split_landmarks = 0;   // joins undone after the first pass (max_joined_error_px)
   int observations = 0;
   double initial_rms_pixels = 0;
   double final_rms_pixels = 0;

@@ -14,8 +14,8 @@ MapRefinementResult RefineFinishedMap(std::shared_ptr<const MapSnapshot> snapsho
                                       const CancellationToken& cancel) {
   MapRefinementResult result;
   result.snapshot = snapshot;
-  if (!options.enabled) {
-    result.summary.reason = "disabled";
+  if (options.max_keyframes == 0) {
+    result.summary.reason = "off";
     return result;
   }
   std::vector<Submap> submaps;
@@ -41,9 +41,10 @@ MapRefinementResult RefineFinishedMap(std::shared_ptr<const MapSnapshot> snapsho
   }
   GLAM_LOG_INFO(
       "global refinement: {} submaps, {} keyframes ({} shared), {} points ({} joined across "
-      "submaps), rms {:.3f} -> {:.3f} px, largest camera move {:.3g}, {} iterations, {:.2f} s",
+      "submaps, {} joins undone), rms {:.3f} -> {:.3f} px, largest camera move {:.3g}, {} iterations, {:.2f} s",
       result.summary.submaps, result.summary.keyframes, result.summary.shared_keyframes,
-      result.summary.landmarks, result.summary.joined_landmarks, result.summary.initial_rms_pixels,
+      result.summary.landmarks, result.summary.joined_landmarks, result.summary.split_landmarks,
+      result.summary.initial_rms_pixels,
       result.summary.final_rms_pixels, result.summary.max_camera_shift, result.summary.iterations,
       result.summary.seconds);
   for (const Submap& submap : submaps) WriteSubmap(submap, submaps_root);

@@ -55,7 +55,7 @@ void UsePaperMethod(MappingOptions* options) {
   options->alignment.use_shared_frames = false;
   options->alignment.local_window = 0;
   options->alignment.max_demotable_submaps = 0;
-  options->global_refinement.enabled = false;
+  options->global_refinement.max_keyframes = 0;
 }
 
 void UseCalibration(MappingOptions* options, const Intrinsics& intrinsics) {

@@ -23,6 +23,7 @@ nlohmann::json GlobalRefinementJson(const GlobalRefinementSummary& r) {
           {"shared_keyframes", r.shared_keyframes},
           {"points", r.landmarks},
           {"joined_points", r.joined_landmarks},
+          {"split_points", r.split_landmarks},
           {"observations", r.observations},
           {"initial_rms_px", r.initial_rms_pixels},
           {"final_rms_px", r.final_rms_pixels},

@@ -288,9 +288,13 @@ async function main() {
       Math.hypot(tileset.root.transform[12], tileset.root.transform[13], tileset.root.transform[14]) > 6.3e6,
       'the georeferenced tileset has a root transform to earth-centred coordinates (the viewer ignores it)');
     check(viewer.revision === tileset.extras.revision, `viewer revision ${viewer.revision} == tileset revision ${tileset.extras.revision}`);
+    // Once per tile version: the end-of-run global refinement rewrites the main map's tiles
+    // under new URIs (report.json global_refinement.applied), so a viewer that watched the run
+    // fetches those twice; moving a tile on a revision never fetches it (step 4).
     const fetches = Object.values(viewer.tileFetches);
-    check(fetches.length === children.length && fetches.every((n) => n === 1),
-      `each tile fetched exactly once: ${JSON.stringify(viewer.tileFetches)}`);
+    const maxFetches = report.global_refinement && report.global_refinement.applied ? 2 : 1;
+    check(fetches.length === children.length && fetches.every((n) => n >= 1 && n <= maxFetches),
+      `each tile fetched once per version (at most ${maxFetches}): ${JSON.stringify(viewer.tileFetches)}`);
 
     // 3. Tiles at the final transforms; moved on revision without reloading points.
     let placed = true;
