@@ -102,6 +102,206 @@ void ApplyToSubmap(Submap& submap, const Sim3& world_from_submap,
   }
 }
 
+// The whole map as one bundle adjustment problem in the world frame: cameras (one per video
+// frame that is a keyframe of any submap) and points (one per landmark group matched across
+// submaps, one per other landmark), and what to write back where.
+class JointProblem {
+ public:
+  JointProblem(const std::vector<Submap>& submaps, const std::vector<Sim3>& world_from_submap,
+               const std::vector<std::vector<LandmarkKey>>& groups)
+      : submaps_(submaps), world_from_submap_(world_from_submap), lens_(submaps.front().intrinsics) {
+    AddCameras();
+    GroupMembers(groups);
+    BuildPoints();
+  }
+
+  // Bundle adjustment with the adjuster's gauge (first camera fixed, scale through the largest
+  // coordinate of the second camera's translation), which assumes the first camera at the
+  // origin: with it elsewhere, that coordinate can stay fixed while the map scales about the
+  // first camera. So the adjustment runs in the first camera's frame and is moved back.
+  BundleAdjustmentSummary Adjust(const BundleAdjustmentOptions& options, const CancellationToken& cancel) {
+    const SE3 first_from_world = cameras_.front().cam_from_submap;
+    const SE3 world_from_first = first_from_world.Inverse();
+    for (Keyframe& camera : cameras_) camera.cam_from_submap = camera.cam_from_submap * world_from_first;
+    for (Landmark& point : points_) point.point_in_submap = first_from_world * point.point_in_submap;
+    const BundleAdjustmentSummary result = BundleAdjust(lens_, cameras_, points_, options, cancel);
+    for (Keyframe& camera : cameras_) camera.cam_from_submap = camera.cam_from_submap * first_from_world;
+    for (Landmark& point : points_) point.point_in_submap = world_from_first * point.point_in_submap;
+    return result;
+  }
+
+  // A join the adjusted map cannot explain (a member's observations reproject worse than
+  // `max_error_px`, rms) was a wrong match: its members become points of their own again, at
+  // their placed positions. Returns how many joins were undone.
+  int SplitInconsistentJoins(double max_error_px) {
+    int undone = 0;
+    std::vector<std::vector<Member>> split;
+    for (std::size_t p = 0; p < points_.size(); ++p) {
+      std::vector<Member>& members = members_of_point_[p];
+      if (members.size() < 2) continue;
+      const bool consistent = std::all_of(members.begin(), members.end(), [&](const Member& m) {
+        return MemberRmsError(m, points_[p].point_in_submap) <= max_error_px;
+      });
+      if (consistent) continue;
+      ++undone;
+      for (std::size_t k = 1; k < members.size(); ++k) split.push_back({members[k]});
+      members.resize(1);
+    }
+    if (undone > 0) {
+      members_of_point_.insert(members_of_point_.end(), split.begin(), split.end());
+      BuildPoints();
+    }
+    return undone;
+  }
+
+  // The median depth of the points in the cameras that observe them (every 7th point).
+  double MedianDepth() const {
+    std::vector<double> depths;
+    for (std::size_t p = 0; p < points_.size(); p += 7) {
+      for (const Observation& o : points_[p].observations) {
+        depths.push_back((cameras_[o.keyframe].cam_from_submap * points_[p].point_in_submap).z());
+      }
+    }
+    return depths.empty() ? 0.0 : UpperMedian(std::move(depths));
+  }
+
+  std::vector<Eigen::Vector3d> CameraCentres() const {
+    std::vector<Eigen::Vector3d> centres;
+    for (const Keyframe& camera : cameras_) centres.push_back(CentreInWorld(camera.cam_from_submap));
+    return centres;
+  }
+
+  // Into each submap's own frame, under its unchanged placement.
+  void WriteBack(std::vector<Submap>& submaps) const {
+    for (std::size_t i = 0; i < submaps.size(); ++i) {
+      std::vector<SE3> cam_from_world;
+      for (std::size_t camera : camera_of_keyframe_[i]) cam_from_world.push_back(cameras_[camera].cam_from_submap);
+      ApplyToSubmap(submaps[i], world_from_submap_[i], cam_from_world);
+    }
+    for (std::size_t p = 0; p < points_.size(); ++p) {
+      for (const Member& m : members_of_point_[p]) {
+        submaps[m.submap].landmarks[m.landmark].point_in_submap =
+            world_from_submap_[m.submap].Inverse() * points_[p].point_in_submap;
+      }
+    }
+  }
+
+  void Summarise(GlobalRefinementSummary* summary) const {
+    summary->keyframes = static_cast<int>(cameras_.size());
+    summary->shared_keyframes = shared_keyframes_;
+    summary->landmarks = static_cast<int>(points_.size());
+    summary->joined_landmarks = 0;
+    for (const auto& members : members_of_point_) summary->joined_landmarks += members.size() > 1 ? 1 : 0;
+    summary->observations = 0;
+    for (const Landmark& point : points_) summary->observations += static_cast<int>(point.observations.size());
+  }
+
+ private:
+  // The overlap hand-off gives some frames a keyframe in two submaps: one camera, starting at
+  // the first submap's pose of it.
+  void AddCameras() {
+    std::map<std::int64_t, std::size_t> camera_of_frame;
+    camera_of_keyframe_.resize(submaps_.size());
+    for (std::size_t i = 0; i < submaps_.size(); ++i) {
+      for (const Keyframe& keyframe : submaps_[i].keyframes) {
+        const auto [it, inserted] = camera_of_frame.emplace(keyframe.frame_index, cameras_.size());
+        if (inserted) {
+          Keyframe camera = keyframe;
+          camera.cam_from_submap = CamFromWorld(keyframe.cam_from_submap, world_from_submap_[i]);
+          cameras_.push_back(camera);
+        } else {
+          ++shared_keyframes_;
+        }
+        camera_of_keyframe_[i].push_back(it->second);
+      }
+    }
+  }
+
+  // members_of_point_: one entry per group (its members in these submaps), then one per
+  // landmark in no group.
+  void GroupMembers(const std::vector<std::vector<LandmarkKey>>& groups) {
+    std::map<std::uint32_t, std::size_t> submap_index;
+    std::vector<std::unordered_map<std::uint32_t, std::size_t>> index_of_id(submaps_.size());
+    std::vector<std::vector<bool>> grouped(submaps_.size());
+    for (std::size_t i = 0; i < submaps_.size(); ++i) {
+      submap_index[submaps_[i].id] = i;
+      grouped[i].assign(submaps_[i].landmarks.size(), false);
+      for (std::size_t l = 0; l < submaps_[i].landmarks.size(); ++l) index_of_id[i][submaps_[i].landmarks[l].id] = l;
+    }
+    for (const std::vector<LandmarkKey>& group : groups) {
+      std::vector<Member> members;
+      for (const LandmarkKey& key : group) {
+        const auto s = submap_index.find(key.submap);
+        if (s == submap_index.end()) continue;
+        const auto l = index_of_id[s->second].find(key.landmark);
+        if (l == index_of_id[s->second].end() || grouped[s->second][l->second]) continue;
+        grouped[s->second][l->second] = true;
+        members.push_back({s->second, l->second});
+      }
+      if (!members.empty()) members_of_point_.push_back(std::move(members));
+    }
+    for (std::size_t i = 0; i < submaps_.size(); ++i) {
+      for (std::size_t l = 0; l < submaps_[i].landmarks.size(); ++l) {
+        if (!grouped[i][l]) members_of_point_.push_back({{i, l}});
+      }
+    }
+  }
+
+  // A member's observations as joint-problem observations: camera indices, and pixels seen
+  // through the joint lens (a submap whose k1 differs slightly is re-expressed).
+  std::vector<Observation> ObservationsOf(const Member& m) const {
+    const Submap& submap = submaps_[m.submap];
+    const bool same_lens = SameLensModel(submap.intrinsics, lens_);
+    std::vector<Observation> out;
+    for (const Observation& o : submap.landmarks[m.landmark].observations) {
+      const Eigen::Vector2f pixel =
+          same_lens ? o.pixel : RemapPixel(submap.intrinsics, lens_, submap.keyframes[o.keyframe].focal, o.pixel);
+      out.push_back({static_cast<std::uint32_t>(camera_of_keyframe_[m.submap][o.keyframe]), pixel});
+    }
+    return out;
+  }
+
+  double MemberRmsError(const Member& m, const Eigen::Vector3d& point_in_world) const {
+    const std::vector<Observation> seen = ObservationsOf(m);
+    double squared = 0;
+    for (const Observation& o : seen) {
+      const double e = ReprojectionError(lens_, cameras_[o.keyframe], point_in_world, o.pixel);
+      squared += e * e;
+    }
+    return seen.empty() ? 0.0 : std::sqrt(squared / static_cast<double>(seen.size()));
+  }
+
+  // Each point: its members' observations (one per camera: a joined keyframe saw it in both
+  // submaps) at the mean of their positions as the map placed them.
+  void BuildPoints() {
+    points_.clear();
+    points_.reserve(members_of_point_.size());
+    for (const std::vector<Member>& members : members_of_point_) {
+      Landmark point;
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      for (const Member& m : members) {
+        sum += world_from_submap_[m.submap] * submaps_[m.submap].landmarks[m.landmark].point_in_submap;
+        for (const Observation& o : ObservationsOf(m)) {
+          const bool seen = std::any_of(point.observations.begin(), point.observations.end(),
+                                        [&o](const Observation& p) { return p.keyframe == o.keyframe; });
+          if (!seen) point.observations.push_back(o);
+        }
+      }
+      point.point_in_submap = sum / static_cast<double>(members.size());
+      points_.push_back(std::move(point));
+    }
+  }
+
+  const std::vector<Submap>& submaps_;
+  const std::vector<Sim3>& world_from_submap_;
+  const Intrinsics lens_;  // the first submap's: cx, cy, k1, k2, aspect (focal per keyframe)
+  std::vector<Keyframe> cameras_;                       // cam_from_submap holds cam_from_world
+  std::vector<std::vector<std::size_t>> camera_of_keyframe_;  // [submap][keyframe] -> camera
+  int shared_keyframes_ = 0;
+  std::vector<std::vector<Member>> members_of_point_;
+  std::vector<Landmark> points_;  // point_in_submap holds point_in_world
+};
+
 }  // namespace
 
 BundleAdjustmentOptions GlobalRefinementOptions::DefaultBundleAdjustment() {
@@ -136,6 +336,9 @@ GlobalRefinementSummary RefineMapJointly(std::vector<Submap>& submaps,
   GLAM_CHECK(submaps.size() == world_from_submap.size(), "{} submaps but {} placements",
              submaps.size(), world_from_submap.size());
   const auto start = std::chrono::steady_clock::now();
+  const auto elapsed = [&start] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  };
   GlobalRefinementSummary summary;
   summary.submaps = static_cast<int>(submaps.size());
   std::size_t total_keyframes = 0;
@@ -154,161 +357,27 @@ GlobalRefinementSummary RefineMapJointly(std::vector<Submap>& submaps,
     return summary;
   }
 
-  // Cameras: one per video frame that is a keyframe of any submap (the overlap hand-off gives
-  // some frames a keyframe in two submaps; the first submap's pose starts the joint one).
-  const Intrinsics& lens = submaps.front().intrinsics;
-  std::vector<Keyframe> cameras;
-  std::map<std::int64_t, std::size_t> camera_of_frame;
-  std::vector<std::vector<std::size_t>> camera_of_keyframe(submaps.size());
-  for (std::size_t i = 0; i < submaps.size(); ++i) {
-    for (const Keyframe& keyframe : submaps[i].keyframes) {
-      const auto [it, inserted] = camera_of_frame.emplace(keyframe.frame_index, cameras.size());
-      if (inserted) {
-        Keyframe camera = keyframe;
-        camera.cam_from_submap = CamFromWorld(keyframe.cam_from_submap, world_from_submap[i]);
-        cameras.push_back(camera);
-      } else {
-        ++summary.shared_keyframes;
-      }
-      camera_of_keyframe[i].push_back(it->second);
-    }
-  }
-
-  // Points: one per cross-submap group, one per remaining landmark.
-  std::vector<std::unordered_map<std::uint32_t, std::size_t>> index_of_id(submaps.size());
-  std::map<std::uint32_t, std::size_t> submap_index;
-  for (std::size_t i = 0; i < submaps.size(); ++i) {
-    submap_index[submaps[i].id] = i;
-    for (std::size_t l = 0; l < submaps[i].landmarks.size(); ++l) {
-      index_of_id[i][submaps[i].landmarks[l].id] = l;
-    }
-  }
-  std::vector<std::vector<Member>> members_of_point;
-  std::vector<std::vector<bool>> grouped(submaps.size());
-  for (std::size_t i = 0; i < submaps.size(); ++i) grouped[i].assign(submaps[i].landmarks.size(), false);
-  for (const std::vector<LandmarkKey>& group : groups) {
-    std::vector<Member> members;
-    for (const LandmarkKey& key : group) {
-      const auto s = submap_index.find(key.submap);
-      if (s == submap_index.end()) continue;
-      const auto l = index_of_id[s->second].find(key.landmark);
-      if (l == index_of_id[s->second].end()) continue;
-      if (grouped[s->second][l->second]) continue;
-      grouped[s->second][l->second] = true;
-      members.push_back({s->second, l->second});
-    }
-    if (!members.empty()) members_of_point.push_back(std::move(members));
-  }
-  for (std::size_t i = 0; i < submaps.size(); ++i) {
-    for (std::size_t l = 0; l < submaps[i].landmarks.size(); ++l) {
-      if (!grouped[i][l]) members_of_point.push_back({{i, l}});
-    }
-  }
-  const auto observations_of = [&](const Member& m) {
-    const Submap& submap = submaps[m.submap];
-    std::vector<Observation> out;
-    for (const Observation& o : submap.landmarks[m.landmark].observations) {
-      Eigen::Vector2f pixel = o.pixel;
-      if (!SameLensModel(submap.intrinsics, lens)) {
-        pixel = RemapPixel(submap.intrinsics, lens, submap.keyframes[o.keyframe].focal, pixel);
-      }
-      out.push_back({static_cast<std::uint32_t>(camera_of_keyframe[m.submap][o.keyframe]), pixel});
-    }
-    return out;
-  };
-  // The joint point of `members`: their observations (one per camera: a joined keyframe saw
-  // the point in both submaps) at the mean of their positions as the map placed them.
-  const auto make_point = [&](const std::vector<Member>& members) {
-    Landmark point;
-    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    for (const Member& m : members) {
-      sum += world_from_submap[m.submap] * submaps[m.submap].landmarks[m.landmark].point_in_submap;
-      for (const Observation& o : observations_of(m)) {
-        const bool seen = std::any_of(point.observations.begin(), point.observations.end(),
-                                      [&o](const Observation& p) { return p.keyframe == o.keyframe; });
-        if (!seen) point.observations.push_back(o);
-      }
-    }
-    point.point_in_submap = sum / static_cast<double>(members.size());
-    return point;
-  };
-  const auto make_points = [&] {
-    std::vector<Landmark> points;
-    points.reserve(members_of_point.size());
-    for (const auto& members : members_of_point) points.push_back(make_point(members));
-    return points;
-  };
-  std::vector<Landmark> points = make_points();
-
-  // The map's median viewing depth, the unit of the shift check.
-  std::vector<double> depths;
-  for (std::size_t p = 0; p < points.size(); p += 7) {
-    for (const Observation& o : points[p].observations) {
-      depths.push_back((cameras[o.keyframe].cam_from_submap * points[p].point_in_submap).z());
-    }
-  }
-  const double depth = depths.empty() ? 0.0 : UpperMedian(depths);
-  std::vector<Eigen::Vector3d> centres_before;
-  for (const Keyframe& camera : cameras) centres_before.push_back(CentreInWorld(camera.cam_from_submap));
-
-  // The bundle adjuster's gauge (first camera fixed, scale through the largest coordinate of
-  // the second camera's translation) assumes the first camera at the origin: with it
-  // elsewhere, that coordinate can stay fixed while the map scales about the first camera.
-  // So the adjustment runs in the first camera's frame and the result is moved back.
-  const SE3 first_from_world = cameras.front().cam_from_submap;
-  const SE3 world_from_first = first_from_world.Inverse();
-  const auto adjust = [&] {
-    for (Keyframe& camera : cameras) camera.cam_from_submap = camera.cam_from_submap * world_from_first;
-    for (Landmark& point : points) point.point_in_submap = first_from_world * point.point_in_submap;
-    const BundleAdjustmentSummary result = BundleAdjust(lens, cameras, points, options.bundle_adjustment, cancel);
-    for (Keyframe& camera : cameras) camera.cam_from_submap = camera.cam_from_submap * first_from_world;
-    for (Landmark& point : points) point.point_in_submap = world_from_first * point.point_in_submap;
-    return result;
-  };
+  JointProblem problem(submaps, world_from_submap, groups);
+  const double depth = problem.MedianDepth();
+  const std::vector<Eigen::Vector3d> centres_before = problem.CameraCentres();
   summary.ran = true;
-  BundleAdjustmentSummary ba = adjust();
-
-  // A join the adjusted map cannot explain was a wrong match (the graph accepts matches within
-  // 2 % of the viewing depth): its members become points of their own again, and the map is
-  // adjusted once more from where the first pass left the cameras.
-  std::vector<std::vector<Member>> split;
-  for (std::size_t p = 0; p < points.size(); ++p) {
-    if (members_of_point[p].size() < 2) continue;
-    bool consistent = true;
-    for (const Member& m : members_of_point[p]) {
-      double squared = 0;
-      const std::vector<Observation> seen = observations_of(m);
-      for (const Observation& o : seen) {
-        const double e = ReprojectionError(lens, cameras[o.keyframe], points[p].point_in_submap, o.pixel);
-        squared += e * e;
-      }
-      if (std::sqrt(squared / static_cast<double>(seen.size())) > options.max_joined_error_px) consistent = false;
-    }
-    if (!consistent) {
-      ++summary.split_landmarks;
-      for (std::size_t k = 1; k < members_of_point[p].size(); ++k) split.push_back({members_of_point[p][k]});
-      members_of_point[p].resize(1);
-    }
-  }
-  if (!split.empty()) {
-    members_of_point.insert(members_of_point.end(), split.begin(), split.end());
+  BundleAdjustmentSummary ba = problem.Adjust(options.bundle_adjustment, cancel);
+  // Undone joins: adjusted once more, from where the first pass left the cameras.
+  summary.split_landmarks = problem.SplitInconsistentJoins(options.max_joined_error_px);
+  if (summary.split_landmarks > 0) {
     const double initial_rms = ba.initial_rms_pixels;
-    points = make_points();
-    ba = adjust();
+    ba = problem.Adjust(options.bundle_adjustment, cancel);
     ba.initial_rms_pixels = initial_rms;
   }
-  for (const auto& members : members_of_point) summary.joined_landmarks += members.size() > 1 ? 1 : 0;
-  summary.keyframes = static_cast<int>(cameras.size());
-  summary.landmarks = static_cast<int>(points.size());
-  for (const Landmark& point : points) summary.observations += static_cast<int>(point.observations.size());
+  problem.Summarise(&summary);
   summary.initial_rms_pixels = ba.initial_rms_pixels;
   summary.final_rms_pixels = ba.final_rms_pixels;
   summary.iterations = ba.iterations;
-  for (std::size_t c = 0; c < cameras.size(); ++c) {
-    summary.max_camera_shift = std::max(
-        summary.max_camera_shift, (CentreInWorld(cameras[c].cam_from_submap) - centres_before[c]).norm());
+  const std::vector<Eigen::Vector3d> centres_after = problem.CameraCentres();
+  for (std::size_t c = 0; c < centres_after.size(); ++c) {
+    summary.max_camera_shift = std::max(summary.max_camera_shift, (centres_after[c] - centres_before[c]).norm());
   }
-  summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  summary.seconds = elapsed();
 
   if (!std::isfinite(ba.final_rms_pixels) || ba.final_rms_pixels > ba.initial_rms_pixels * 1.001 + 1e-6) {
     summary.reason = fmt::format("the adjustment did not lower the reprojection error ({:.3f} -> {:.3f} px)",
@@ -320,20 +389,9 @@ GlobalRefinementSummary RefineMapJointly(std::vector<Submap>& submaps,
                                  summary.max_camera_shift, depth);
     return summary;
   }
-
-  for (std::size_t i = 0; i < submaps.size(); ++i) {
-    std::vector<SE3> cam_from_world;
-    for (std::size_t camera : camera_of_keyframe[i]) cam_from_world.push_back(cameras[camera].cam_from_submap);
-    ApplyToSubmap(submaps[i], world_from_submap[i], cam_from_world);
-  }
-  for (std::size_t p = 0; p < points.size(); ++p) {
-    for (const Member& m : members_of_point[p]) {
-      submaps[m.submap].landmarks[m.landmark].point_in_submap =
-          world_from_submap[m.submap].Inverse() * points[p].point_in_submap;
-    }
-  }
+  problem.WriteBack(submaps);
   summary.applied = true;
-  summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  summary.seconds = elapsed();
   return summary;
 }
 

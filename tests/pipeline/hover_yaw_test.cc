@@ -38,7 +38,13 @@ eval::EvaluationResult MapAndEvaluate(const MappingOptions& options, const std::
   if (const auto it = done.find(name); it != done.end()) return it->second;
   const fs::path out = OutDir(name);
   fs::remove_all(out);
-  RunMapping(kClip / "video.mp4", out, options);  // uncalibrated: the focal is estimated
+  // These tests compare how thread 1 poses the hovering frames, so the end-of-run global
+  // refinement is off: on this clip it lowers the moving frames' error (0.169 -> 0.151 m) and
+  // raises the hovering frames' (0.161 -> 0.246 m; docs/algorithm.md, global refinement), in
+  // both configurations, which would blur the difference each test is about.
+  MappingOptions rigid = options;
+  rigid.global_refinement.max_keyframes = 0;
+  RunMapping(kClip / "video.mp4", out, rigid);  // uncalibrated: the focal is estimated
   const eval::EvaluationResult result = eval::EvaluateDirectories(kClip, out, {});
   std::cout << name << ": " << eval::Summary(result) << "\n";
   done.emplace(name, result);
