@@ -131,38 +131,38 @@ Scene MakeScene(std::int64_t b_first_keyframe, double b_k1 = 0) {
   return scene;
 }
 
-// Largest distance of submap 1's frame centres (every frame, keyframes or not) from the truth,
-// in the world as the given placement puts them.
+// The largest of `error(frame index, cam_from_world, centre)` over submap 1's frames (every
+// frame, keyframes or not), posed in the world as the given placement puts them.
+template <typename Error>
+double WorstOverFrames(const Scene& scene, Error error) {
+  double worst = 0;
+  for (const FramePose& pose : scene.submaps[1].frame_poses) {
+    const SE3 cam_from_world = InWorld(pose.cam_from_submap, scene.world_from_submap[1]);
+    const Eigen::Vector3d centre = -(cam_from_world.rotation().Inverse() * cam_from_world.translation());
+    worst = std::max(worst, error(pose.frame_index, cam_from_world, centre));
+  }
+  return worst;
+}
+
+// Distance of the centres from the truth.
 double WorstCentreError(const Scene& scene) {
-  double worst = 0;
-  for (const FramePose& pose : scene.submaps[1].frame_poses) {
-    const SE3 cam_from_world = InWorld(pose.cam_from_submap, scene.world_from_submap[1]);
-    const Eigen::Vector3d centre = -(cam_from_world.rotation().Inverse() * cam_from_world.translation());
-    worst = std::max(worst, (centre - Eigen::Vector3d(CentreX(pose.frame_index), 0, kAltitude)).norm());
-  }
-  return worst;
+  return WorstOverFrames(scene, [](std::int64_t frame, const SE3&, const Eigen::Vector3d& centre) {
+    return (centre - Eigen::Vector3d(CentreX(frame), 0, kAltitude)).norm();
+  });
 }
 
-// Worst rotation error (degrees) of submap 1's frames in the world, and worst distance of
-// their centres from the flight line (y = 0, z = altitude).
+// Rotation error (degrees).
 double WorstRotationErrorDeg(const Scene& scene) {
-  double worst = 0;
-  for (const FramePose& pose : scene.submaps[1].frame_poses) {
-    const SE3 cam_from_world = InWorld(pose.cam_from_submap, scene.world_from_submap[1]);
-    const SO3 error = cam_from_world.rotation() * TrueCamFromWorld(0).rotation().Inverse();
-    worst = std::max(worst, error.Log().norm() * 180 / M_PI);
-  }
-  return worst;
+  return WorstOverFrames(scene, [](std::int64_t, const SE3& cam_from_world, const Eigen::Vector3d&) {
+    return (cam_from_world.rotation() * TrueCamFromWorld(0).rotation().Inverse()).Log().norm() * 180 / M_PI;
+  });
 }
 
+// Distance of the centres from the flight line (y = 0, z = altitude).
 double WorstOffLineError(const Scene& scene) {
-  double worst = 0;
-  for (const FramePose& pose : scene.submaps[1].frame_poses) {
-    const SE3 cam_from_world = InWorld(pose.cam_from_submap, scene.world_from_submap[1]);
-    const Eigen::Vector3d centre = -(cam_from_world.rotation().Inverse() * cam_from_world.translation());
-    worst = std::max(worst, Eigen::Vector2d(centre.y(), centre.z() - kAltitude).norm());
-  }
-  return worst;
+  return WorstOverFrames(scene, [](std::int64_t, const SE3&, const Eigen::Vector3d& centre) {
+    return Eigen::Vector2d(centre.y(), centre.z() - kAltitude).norm();
+  });
 }
 
 double WorstPointError(const Scene& scene, std::size_t s) {
