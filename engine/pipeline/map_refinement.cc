@@ -39,14 +39,13 @@ MapRefinementResult RefineFinishedMap(std::shared_ptr<const MapSnapshot> snapsho
     }
     return result;
   }
+  const GlobalRefinementSummary& s = result.summary;
   GLAM_LOG_INFO(
       "global refinement: {} submaps, {} keyframes ({} shared), {} points ({} joined across "
-      "submaps, {} joins undone), rms {:.3f} -> {:.3f} px, largest camera move {:.3g}, {} iterations, {:.2f} s",
-      result.summary.submaps, result.summary.keyframes, result.summary.shared_keyframes,
-      result.summary.landmarks, result.summary.joined_landmarks, result.summary.split_landmarks,
-      result.summary.initial_rms_pixels,
-      result.summary.final_rms_pixels, result.summary.max_camera_shift, result.summary.iterations,
-      result.summary.seconds);
+      "submaps, {} joins undone), rms {:.3f} -> {:.3f} px, largest camera move {:.3g}, "
+      "{} iterations, {:.2f} s",
+      s.submaps, s.keyframes, s.shared_keyframes, s.landmarks, s.joined_landmarks, s.split_landmarks,
+      s.initial_rms_pixels, s.final_rms_pixels, s.max_camera_shift, s.iterations, s.seconds);
   for (const Submap& submap : submaps) WriteSubmap(submap, submaps_root);
   tiles.OnSubmapsRefined(submaps);
   auto refined = std::make_shared<MapSnapshot>(*snapshot);

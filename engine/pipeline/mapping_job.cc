@@ -369,21 +369,17 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
     throw InputError(fmt::format("{}: no frames could be decoded", report.input));
   }
 
+  state.stage = "refining";
+  emit(true);
+  MapRefinementResult refined = RefineFinishedMap(aligner.snapshot(), aligner.LandmarkGroups(), submaps_root,
+                                                  tiles, options.global_refinement, cancel);
+  report.global_refinement = refined.summary;
+  report.timings.global_refinement_s = refined.summary.seconds;
+  std::shared_ptr<const MapSnapshot> snapshot = std::move(refined.snapshot);
+
   state.stage = "writing";
   emit(true);
   const auto write_start = Clock::now();
-  std::shared_ptr<const MapSnapshot> snapshot = aligner.snapshot();
-  {
-    state.stage = "refining";
-    emit(true);
-    MapRefinementResult refined = RefineFinishedMap(snapshot, aligner.LandmarkGroups(), submaps_root,
-                                                    tiles, options.global_refinement, cancel);
-    report.global_refinement = refined.summary;
-    report.timings.global_refinement_s = refined.summary.seconds;
-    snapshot = std::move(refined.snapshot);
-    state.stage = "writing";
-    emit(true);
-  }
   if (gps) {
     MapGeoreference geo = GeoreferenceMap(*snapshot, submaps_root, report.fps, *gps, options.georeference);
     report.georeference = geo.map;

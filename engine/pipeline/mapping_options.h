@@ -94,8 +94,8 @@ inline constexpr double kAutoDetectionSeconds = 0.2;
 // the constant weak prior (no shared focal, no prior growth, no submap rebuild when the focal
 // moves), completion by PnP relocalisation only (no completion bundle adjustment), no
 // extension of a short final submap; thread 2 with landmark-only edges (no shared frames) and
-// whole-graph solves (no local window); no global refinement at the end. Kept, because they have no paper counterpart to go
-// back to or the paper leaves them open: RootSIFT (the built-in vocabulary is trained on it),
+// whole-graph solves (no local window); no global refinement at the end. Kept, because they
+// have no paper counterpart to go back to or the paper leaves them open: RootSIFT (the built-in vocabulary is trained on it),
 // the inlier thresholds' scaling with the feature count, the outlier filters' parameters, the
 // verifier's checks. For comparing against the paper (`glam map --paper`); slower (SIFT on every
 // frame: ~5 fps at 1280x720) and on the synthetic test clips it maps less of the ground.
