@@ -12,7 +12,8 @@
 // The adjustment is the submap bundle adjuster (submap/bundle_adjuster.h) run in the world
 // frame over every keyframe and landmark of the main map, focal and distortion fixed, with
 // the first keyframe and the scale held (the world frame, levelled and possibly georeferenced
-// later, stays where it is). Results go back into each submap's own frame under its unchanged
+// later, stays where it is). A join the adjusted map cannot explain is undone and the map
+// adjusted once more (max_joined_error_px). Results go back into each submap's own frame under its unchanged
 // world_from_submap, so a snapshot's placements stay valid: keyframes and landmarks take their
 // refined values, every other frame the keyframes' correction interpolated by frame index.
 //
