@@ -12,6 +12,7 @@
 #include "engine/core/logging.h"
 #include "engine/core/median.h"
 #include "engine/core/options.h"
+#include "engine/geometry/triangulation.h"
 
 namespace glam {
 namespace {
@@ -37,10 +38,6 @@ SE3 CamFromSubmap(const SE3& cam_from_world, const Sim3& world_from_submap) {
              (cam_from_world.rotation() * world_from_submap.translation() +
               cam_from_world.translation()) /
                  world_from_submap.scale());
-}
-
-Eigen::Vector3d CentreInWorld(const SE3& cam_from_world) {
-  return -(cam_from_world.rotation().Inverse() * cam_from_world.translation());
 }
 
 bool SameLensModel(const Intrinsics& a, const Intrinsics& b) {
@@ -167,7 +164,7 @@ class JointProblem {
 
   std::vector<Eigen::Vector3d> CameraCentres() const {
     std::vector<Eigen::Vector3d> centres;
-    for (const Keyframe& camera : cameras_) centres.push_back(CentreInWorld(camera.cam_from_submap));
+    for (const Keyframe& camera : cameras_) centres.push_back(CameraCenter(camera.cam_from_submap));
     return centres;
   }
 
