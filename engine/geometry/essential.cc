@@ -284,7 +284,8 @@ std::vector<RelativeMotionEstimator::Model> HomographySeeds(std::span<const TwoV
 
 RelativePoseResult EstimateRelativePose(std::span<const TwoViewCorrespondence> data,
                                         double focal_px, const RansacOptions& options,
-                                        double max_depth) {
+                                        double max_depth,
+                                        const std::optional<MotionPreference>& preference) {
   RelativePoseResult result;
   const RelativeMotionEstimator estimator(focal_px, options.inlier_threshold / focal_px);
   auto ransac = Ransac(estimator, data, options);
@@ -298,7 +299,17 @@ RelativePoseResult EstimateRelativePose(std::span<const TwoViewCorrespondence> d
   // (30 degrees from nadir, 60 m, 12 m relief) consecutive bootstrap candidates came out at
   // 3.1 deg median triangulation angle where the truth is 9.3 deg. The decompositions of the
   // homography reach both basins; each is refined on the inliers, and the motion with the
-  // lowest MSAC cost over all correspondences wins (tests/geometry).
+  // lowest MSAC cost over all correspondences wins (tests/geometry) — or, with a preference,
+  // the one nearest it among those almost as good.
+  struct Candidate {
+    RelativeMotionEstimator::Model model;
+    double cost;
+    Eigen::Vector3d centre_direction;  // camera 2's centre in camera 1, unit
+  };
+  const auto centre_direction = [](const RelativeMotionEstimator::Model& m) -> Eigen::Vector3d {
+    return (-(m.R.transpose() * m.t)).normalized();
+  };
+  std::vector<Candidate> candidates{{ransac.model, ransac.cost, centre_direction(ransac.model)}};
   {
     std::vector<TwoViewCorrespondence> inliers;
     for (std::size_t i = 0; i < data.size(); ++i) {
@@ -308,14 +319,26 @@ RelativePoseResult EstimateRelativePose(std::span<const TwoViewCorrespondence> d
          HomographySeeds(data, inliers, options.inlier_threshold / focal_px)) {
       int seed_inliers = 0;
       const double cost = ransac_internal::Cost(estimator, seed, data, options.inlier_threshold,
-                                                ransac.cost, &seed_inliers);
-      if (cost < ransac.cost) {
-        ransac.cost = cost;
-        ransac.model = seed;
-        for (std::size_t i = 0; i < data.size(); ++i) {
-          ransac.inlier_mask[i] = estimator.Residual(seed, data[i]) < options.inlier_threshold;
-        }
+                                                std::numeric_limits<double>::infinity(), &seed_inliers);
+      if (std::isfinite(cost)) candidates.push_back({seed, cost, centre_direction(seed)});
+    }
+  }
+  const auto lowest = std::min_element(candidates.begin(), candidates.end(),
+                                       [](const Candidate& a, const Candidate& b) { return a.cost < b.cost; });
+  const Candidate* chosen = &*lowest;
+  if (preference) {
+    for (const Candidate& c : candidates) {
+      if (c.cost > preference->max_cost_ratio * lowest->cost) continue;
+      if (c.centre_direction.dot(preference->centre_direction) >
+          chosen->centre_direction.dot(preference->centre_direction)) {
+        chosen = &c;
       }
+    }
+  }
+  if (chosen != &candidates.front()) {
+    ransac.model = chosen->model;
+    for (std::size_t i = 0; i < data.size(); ++i) {
+      ransac.inlier_mask[i] = estimator.Residual(chosen->model, data[i]) < options.inlier_threshold;
     }
   }
   result.essential = ransac.model.E;

@@ -7,6 +7,7 @@
 // (R, t) is cam2_from_cam1; |t| = 1 (scale is unobservable).
 #pragma once
 
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -96,6 +97,18 @@ struct RelativePoseResult {
   int iterations = 0;
 };
 
+// Motions whose camera-2 centre directions (seen from camera 1) differ by more than this are
+// in different basins (the two motions of a nearly planar scene differ by tens of degrees).
+inline constexpr double kDistinctMotionDeg = 10.0;
+
+// Steers EstimateRelativePose between near-equivalent motions: among the candidates whose MSAC
+// cost is at most max_cost_ratio times the lowest, the one whose camera-2 centre direction
+// (unit, camera 1 frame) is closest to `centre_direction` is chosen.
+struct MotionPreference {
+  Eigen::Vector3d centre_direction = Eigen::Vector3d::UnitZ();
+  double max_cost_ratio = 1.0;
+};
+
 // RANSAC (RelativeMotionEstimator), then the homography's decompositions refined on the
 // inliers as alternative motions (the lowest MSAC cost wins: nearly planar scenes have a second,
 // wrong motion whose basin five-point samples often fall into; essential.cc), then
@@ -103,8 +116,10 @@ struct RelativePoseResult {
 // success requires options.min_inliers (and 5) inliers after cheirality.
 // max_depth as in RecoverRelativePose: raise it where small baselines are expected (a
 // bootstrap watching parallax grow decides on triangulation angles itself).
+// `preference` (optional) chooses among near-equivalent motions as described there.
 RelativePoseResult EstimateRelativePose(std::span<const TwoViewCorrespondence> data,
                                         double focal_px, const RansacOptions& options,
-                                        double max_depth = 50.0);
+                                        double max_depth = 50.0,
+                                        const std::optional<MotionPreference>& preference = std::nullopt);
 
 }  // namespace glam

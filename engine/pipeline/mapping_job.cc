@@ -416,6 +416,8 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   report.tracking_losses = stats.tracking_losses;
   report.frames_rotation_only = stats.frames_rotation_only;
   report.submap_rebuilds = stats.submap_rebuilds;
+  report.bootstrap_twin_checks = stats.bootstrap_twin_checks;
+  report.bootstrap_twins_kept = stats.bootstrap_twins_kept;
   report.revision = snapshot->revision;
   report.graph_edges = static_cast<std::int64_t>(aligner.edges().size());
   for (const AlignmentEdge& e : aligner.edges()) report.retrieved_edges += e.temporal ? 0 : 1;

@@ -49,6 +49,7 @@ void UsePaperMethod(MappingOptions* options) {
   submap.extend_short_final_submap = false;
   submap.isolated_filter_once = false;
   submap.bootstrap_rotation_veto_fraction = 0;
+  submap.bootstrap_twin_focal_step = 0;
   submap.hover_max_speed = 0;
   submap.focal_profile_step = 0;
   submap.bundle_adjustment.refine_k1 = false;

@@ -210,6 +210,8 @@ nlohmann::json MappingReport::ToJson() const {
           {"tracking_losses", tracking_losses},
           {"frames_rotation_only", frames_rotation_only},
           {"submap_rebuilds", submap_rebuilds},
+          {"bootstrap_twin_checks", bootstrap_twin_checks},
+          {"bootstrap_twins_kept", bootstrap_twins_kept},
           {"resumed_from_frame", resumed_from_frame},
           {"revision", revision},
           {"graph", {{"edges", graph_edges}, {"retrieved_edges", retrieved_edges}, {"landmarks", graph_landmarks}}},

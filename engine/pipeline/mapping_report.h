@@ -50,6 +50,10 @@ struct MappingReport {
   // Frames posed by rotation only through a hovering yaw (SubmapOptions::hover_max_speed).
   std::int64_t frames_rotation_only = 0;
   std::int64_t submap_rebuilds = 0;  // submaps tracked again after the focal estimate moved
+  // Open submaps tracked again from the other motion of a focal-dependent bootstrap, and how
+  // many of those second builds were kept (SubmapOptions::bootstrap_twin_focal_step).
+  std::int64_t bootstrap_twin_checks = 0;
+  std::int64_t bootstrap_twins_kept = 0;
   std::int64_t resumed_from_frame = -1;  // first frame mapped by this run when resumed
   std::int64_t revision = 0;             // of the final map
   std::int64_t graph_edges = 0;

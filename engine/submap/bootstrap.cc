@@ -7,7 +7,9 @@
 // taken, or the bootstrap restarts at the current frame.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
+#include <optional>
 
 #include "engine/core/logging.h"
 #include "engine/core/median.h"
@@ -23,6 +25,9 @@ namespace {
 constexpr double kRadToDeg = 180.0 / M_PI;
 // Small baselines are normal while the bootstrap waits for parallax; the angle rules decide.
 constexpr double kMaxDepthBaselines = 1e4;
+// A steered bootstrap (OpenSubmap::bootstrap_preference) takes the preferred basin's motion
+// when it costs at most this much more than the cheapest.
+constexpr double kPreferenceMaxCostRatio = 1.1;
 
 struct TwoViewCandidate {
   std::size_t position = 0;  // of the second frame in the open submap's frames
@@ -35,7 +40,53 @@ struct TwoViewCandidate {
   double mean_angle_deg = 0;
 };
 
+// Normalised rays of the matched features (query: `second`, train: `first`) through `camera`.
+std::vector<TwoViewCorrespondence> Rays(const Camera& camera, const FrameRecord& first, const FrameRecord& second,
+                                        const std::vector<Match>& matches) {
+  std::vector<TwoViewCorrespondence> rays;
+  rays.reserve(matches.size());
+  for (const Match& m : matches) {
+    rays.push_back({camera.Unproject(first.features.points[m.train].cast<double>()).head<2>(),
+                    camera.Unproject(second.features.points[m.query].cast<double>()).head<2>()});
+  }
+  return rays;
+}
+
 }  // namespace
+
+RansacOptions SubmapBuilder::BootstrapRansacOptions() const {
+  RansacOptions ransac;
+  ransac.inlier_threshold = options_.pnp_threshold_pixels;
+  ransac.min_inliers = options_.min_tracking_inliers;
+  return ransac;
+}
+
+std::optional<SubmapBuilder::OpenSubmap::Twin> SubmapBuilder::FocalTwin(const FrameRecord& first,
+                                                                         const FrameRecord& second,
+                                                                         const std::vector<Match>& matches) const {
+  const double step = options_.bootstrap_twin_focal_step;
+  if (step <= 0 || !options_.bundle_adjustment.refine_focal || !camera_decisions_open_ ||
+      !open_.bootstrap_direction) {
+    return std::nullopt;
+  }
+  const double distinct_cos = std::cos(kDistinctMotionDeg / kRadToDeg);
+  for (const double scale : {1.0 - step, 1.0 + step}) {
+    Intrinsics intrinsics = CurrentCamera().intrinsics();
+    intrinsics.fx *= scale;
+    intrinsics.fy *= scale;
+    const RelativePoseResult rel = EstimateRelativePose(Rays(Camera(intrinsics), first, second, matches),
+                                                        intrinsics.fx, BootstrapRansacOptions(), kMaxDepthBaselines);
+    if (!rel.success) continue;
+    const Eigen::Vector3d direction = CameraCenter(rel.cam2_from_cam1).normalized();
+    if (direction.dot(*open_.bootstrap_direction) >= distinct_cos) continue;
+    GLAM_LOG_DEBUG("bootstrap frames {} and {}: at focal {:.1f} px the views give another motion (centre "
+                   "direction {:.1f} deg from the one at {:.1f} px)",
+                   first.index, second.index, intrinsics.fx,
+                   std::acos(std::clamp(direction.dot(*open_.bootstrap_direction), -1.0, 1.0)) * kRadToDeg, focal_);
+    return OpenSubmap::Twin{direction, intrinsics.fx};
+  }
+  return std::nullopt;
+}
 
 bool SubmapBuilder::TryBootstrap() {
   // The first frame of the (re)started bootstrap is the first keyframe candidate.
@@ -55,15 +106,14 @@ bool SubmapBuilder::TryBootstrap() {
   candidate.position = position;
   bool usable = false;
   if (static_cast<int>(matches.size()) >= options_.min_tracking_inliers) {
-    std::vector<TwoViewCorrespondence> rays;
-    for (const Match& m : matches) {
-      rays.push_back({camera.Unproject(first.features.points[m.train].cast<double>()).head<2>(),
-                      camera.Unproject(current.features.points[m.query].cast<double>()).head<2>()});
+    const std::vector<TwoViewCorrespondence> rays = Rays(camera, first, current, matches);
+    const RansacOptions ransac = BootstrapRansacOptions();
+    std::optional<MotionPreference> preference;
+    if (open_.bootstrap_preference) {
+      preference = MotionPreference{*open_.bootstrap_preference, kPreferenceMaxCostRatio};
     }
-    RansacOptions ransac;
-    ransac.inlier_threshold = options_.pnp_threshold_pixels;
-    ransac.min_inliers = options_.min_tracking_inliers;
-    const RelativePoseResult rel = EstimateRelativePose(rays, camera.intrinsics().fx, ransac, kMaxDepthBaselines);
+    const RelativePoseResult rel =
+        EstimateRelativePose(rays, camera.intrinsics().fx, ransac, kMaxDepthBaselines, preference);
     if (rel.success) {
       candidate.cam1_from_cam0 = rel.cam2_from_cam1;
       const SE3 poses[2] = {SE3(), rel.cam2_from_cam1};
@@ -132,6 +182,7 @@ bool SubmapBuilder::TryBootstrap() {
       open_.frames.erase(open_.frames.begin(), open_.frames.begin() + static_cast<std::ptrdiff_t>(position));
       open_.bootstrap_first = 0;
       open_.tau_stereo = 0;
+      open_.bootstrap_preference.reset();  // a direction seen from the old first frame
     }
     return false;
   }
@@ -167,6 +218,8 @@ bool SubmapBuilder::TryBootstrap() {
   GLAM_LOG_DEBUG("bootstrap: keyframes at frames {} and {}, {} landmarks, median angle {:.1f} deg",
                  open_.frames[0].index, open_.frames[kf1_position].index, open_.landmarks.size(),
                  candidate.median_angle_deg);
+  open_.bootstrap_direction = CameraCenter(candidate.cam1_from_cam0).normalized();
+  if (!open_.bootstrap_twin_checked) open_.bootstrap_twin = FocalTwin(open_.frames[0], open_.frames[kf1_position], matches);
 
   // Frames between the two keyframes are localised against the new landmarks in order, each
   // guided first by a constant-velocity prediction off the two frames before it (the first by

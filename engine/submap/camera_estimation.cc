@@ -39,7 +39,9 @@ bool SubmapBuilder::RebuildIfCameraMoved(std::vector<Submap>* completed) {
   // even rebuild it again, up to the limit) before the current frame is reached.
   const auto track_again = [this, completed] {
     ++stats_.submap_rebuilds;
-    RestartWith(std::move(open_.frames), open_.rebuilds + 1, completed);
+    // Same first frame: the bootstrap keeps the motion a twin check decided on.
+    const RestartCarry carry{open_.rebuilds + 1, open_.bootstrap_preference, open_.bootstrap_twin_checked};
+    RestartWith(std::move(open_.frames), carry, completed);
     return true;
   };
   // Held or kept, the submap is tracked again at the decided k1 (and the focal of its

@@ -225,6 +225,7 @@ void SubmapBuilder::OptimiseAndFilter() {
   ba.k1_prior_weight *= prior_growth;
   const auto summary = BundleAdjust(CurrentCamera().intrinsics(), open_.keyframes, open_.landmarks, ba, cancel_);
   stats_.bundle_adjust_seconds += summary.seconds;
+  open_.last_ba_rms = summary.final_rms_pixels;
   k1_ = summary.k1;
   RemoveReprojectionOutliers(CurrentCamera().intrinsics(), open_.keyframes, open_.landmarks,
                              options_.outlier_filter);

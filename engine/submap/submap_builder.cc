@@ -119,7 +119,7 @@ void SubmapBuilder::Process(FrameRecord record, std::vector<Submap>* completed) 
       ++stats_.submaps_discarded;
     }
     previous_tail_.clear();  // no shared ground with the next submap
-    RestartWith(std::move(restart), 0, completed);
+    RestartWith(std::move(restart), {}, completed);
     return;
   }
   ++stats_.frames_tracked;
@@ -148,6 +148,9 @@ void SubmapBuilder::Process(FrameRecord record, std::vector<Submap>* completed) 
                                  options_.min_map_coverage > 0 && MapCoverageLow(current) &&
                                  CanTriangulateWithLastKeyframe(current);
   if (paper_keyframe || parallax_keyframe || coverage_keyframe) InsertKeyframes(open_.frames.size() - 1);
+  // May track the open submap again up to this frame (its completion rule below then looks at
+  // whichever build was kept).
+  if (BootstrapTwinCheckDue()) CheckBootstrapTwin(completed);
 
   if ((!extending_tail_ && static_cast<int>(open_.keyframes.size()) >= options_.keyframes_per_submap) ||
       static_cast<int>(open_.frames.size()) >= options_.max_frames_per_submap) {
@@ -155,13 +158,15 @@ void SubmapBuilder::Process(FrameRecord record, std::vector<Submap>* completed) 
   }
 }
 
-void SubmapBuilder::RestartWith(std::deque<FrameRecord> frames, int rebuilds,
+void SubmapBuilder::RestartWith(std::deque<FrameRecord> frames, const RestartCarry& carry,
                                 std::vector<Submap>* completed) {
   std::deque<FrameRecord> start;
   start.push_back(std::move(frames.front()));
   frames.pop_front();
   StartSubmapAt(std::move(start));
-  open_.rebuilds = rebuilds;
+  open_.rebuilds = carry.rebuilds;
+  open_.bootstrap_preference = carry.bootstrap_preference;
+  open_.bootstrap_twin_checked = carry.bootstrap_twin_checked;
   for (FrameRecord& f : frames) {
     cancel_.ThrowIfCancelled();
     f.ResetPose();
@@ -229,7 +234,7 @@ std::vector<Submap> SubmapBuilder::Finish() {
     previous_tail_.clear();
     for (FrameRecord& f : open_.frames) frames.push_back(std::move(f));
     extending_tail_ = true;
-    RestartWith(std::move(frames), open_.rebuilds, &completed);
+    RestartWith(std::move(frames), RestartCarry{open_.rebuilds, std::nullopt, false}, &completed);
     extending_tail_ = false;
     // The ground seen after the last keyframe is mapped too: the last tracked frame becomes a
     // keyframe when its parallax allows triangulating.
@@ -315,7 +320,7 @@ void SubmapBuilder::HandOffOverlap(std::vector<Submap>* completed) {
   std::deque<FrameRecord> replay(begin + static_cast<std::ptrdiff_t>(first_position),
                                  std::make_move_iterator(open_.frames.end()));
   // The next submap bootstraps from the overlap's first frame and re-tracks the rest.
-  RestartWith(std::move(replay), 0, completed);
+  RestartWith(std::move(replay), {}, completed);
 }
 
 }  // namespace glam

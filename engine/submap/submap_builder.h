@@ -23,7 +23,9 @@
 
 #include "engine/core/camera.h"
 #include "engine/core/cancellation.h"
+#include "engine/features/feature_matcher.h"
 #include "engine/features/features.h"
+#include "engine/geometry/ransac.h"
 #include "engine/map/submap.h"
 #include "engine/submap/frame_record.h"
 #include "engine/submap/submap_options.h"
@@ -39,6 +41,10 @@ struct SubmapBuilderStats {
   std::int64_t tracking_losses = 0;
   std::int64_t frames_rotation_only = 0;  // posed by rotation only (SubmapOptions::hover_max_speed)
   std::int64_t submap_rebuilds = 0;  // open submaps tracked again after a focal or k1 change
+  // SubmapOptions::bootstrap_twin_*: open submaps tracked again from the other motion of an
+  // ambiguous bootstrap, and how many of those builds were kept.
+  std::int64_t bootstrap_twin_checks = 0;
+  std::int64_t bootstrap_twins_kept = 0;
   double bundle_adjust_seconds = 0;
   // Where the first completed submap's bundle adjustment takes a fixed focal when it is let
   // free (processing pixels; SubmapOptions::check_fixed_focal). Unset while refining anyway.
@@ -111,6 +117,39 @@ class SubmapBuilder {
     double start_focal = 0;           // focal estimate when this submap (or its rebuild) started
     double start_k1 = 0;              // k1 estimate then
     int rebuilds = 0;                 // times this submap was rebuilt (SubmapOptions)
+    // Reprojection rms (px) of the latest bundle adjustment of this submap.
+    double last_ba_rms = 0;
+    // Motions as camera centre directions of the second bootstrap keyframe seen from the
+    // first (unit, submap frame): the bootstrap's, and for SubmapOptions::bootstrap_twin_* the
+    // one it is steered to (set once a check decided; kept through rebuilds from the same
+    // first frame) and, while its check is pending, the other basin's motion with the focal
+    // at which the bootstrap's views gave it.
+    std::optional<Eigen::Vector3d> bootstrap_direction;
+    std::optional<Eigen::Vector3d> bootstrap_preference;
+    struct Twin {
+      Eigen::Vector3d direction;
+      double focal = 0;
+    };
+    std::optional<Twin> bootstrap_twin;
+    bool bootstrap_twin_checked = false;
+  };
+  // What a restarted open submap keeps from the one it replaces (RestartWith).
+  struct RestartCarry {
+    int rebuilds = 0;
+    std::optional<Eigen::Vector3d> bootstrap_preference;
+    bool bootstrap_twin_checked = false;
+  };
+  // Everything CheckBootstrapTwin() may have to put back.
+  struct BuilderState {
+    OpenSubmap open;
+    double focal = 0;
+    double k1 = 0;
+    std::vector<double> completed_keyframe_focals;
+    std::deque<FrameRecord> previous_tail;
+    SubmapOptions options;
+    std::uint32_t next_submap_id = 0;
+    bool camera_decisions_open = true;
+    SubmapBuilderStats stats;
   };
 
   void Process(FrameRecord record, std::vector<Submap>* completed);
@@ -129,6 +168,19 @@ class SubmapBuilder {
 
   // bootstrap.cc: returns true once the second keyframe exists.
   bool TryBootstrap();
+  RansacOptions BootstrapRansacOptions() const;
+  // SubmapOptions::bootstrap_twin_focal_step: the motion the bootstrap's views give at a
+  // focal that much lower or higher, if it lies in another basin than the bootstrap's
+  // (open_.bootstrap_direction); only while the first submap estimates the focal.
+  std::optional<OpenSubmap::Twin> FocalTwin(const FrameRecord& first, const FrameRecord& second,
+                                            const std::vector<Match>& matches) const;
+  // bootstrap_twin.cc (SubmapOptions::bootstrap_twin_*): whether the open submap's ambiguous
+  // bootstrap is due for its check, and the check itself (the open submap is tracked again
+  // from the other motion; the better build is kept).
+  bool BootstrapTwinCheckDue() const;
+  void CheckBootstrapTwin(std::vector<Submap>* completed);
+  BuilderState SaveState() const;
+  void RestoreState(BuilderState state);
   void StartSubmapAt(std::deque<FrameRecord> frames);
   // At completion (and at the end of input): re-tracks the open submap's frames from its first
   // one at the current camera when the focal estimate, or the k1 estimate's radial scale at
@@ -166,10 +218,10 @@ class SubmapBuilder {
   // k1 profile then held k1 and whose focal ended 4.4 % off for the whole flight): the
   // decisions wait for the next submap.
   bool CameraDecidingSubmap() const;
-  // Starts a new open submap at frames.front() (its `rebuilds` count set) and feeds the other
+  // Starts a new open submap at frames.front() (with what `carry` keeps) and feeds the other
   // frames, kept in memory, through Process() again, forgetting their earlier poses. Shared by
-  // the overlap hand-off and the rebuild.
-  void RestartWith(std::deque<FrameRecord> frames, int rebuilds, std::vector<Submap>* completed);
+  // the overlap hand-off, the rebuild and the twin check.
+  void RestartWith(std::deque<FrameRecord> frames, const RestartCarry& carry, std::vector<Submap>* completed);
 
   // tracking.cc: poses `record` against the landmarks; false if tracking is lost.
   bool Track(FrameRecord& record);

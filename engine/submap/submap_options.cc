@@ -30,6 +30,9 @@ void SubmapOptions::Check() const {
   CheckInRange("SubmapOptions.hover_max_seconds", hover_max_seconds, 0.0, 3600.0);
   CheckInRange("SubmapOptions.hover_min_turn_rate_deg_s", hover_min_turn_rate_deg_s, 0.0, 3600.0);
   CheckInRange("SubmapOptions.bootstrap_rotation_veto_fraction", bootstrap_rotation_veto_fraction, 0.0, 1.0);
+  CheckInRange("SubmapOptions.bootstrap_twin_focal_step", bootstrap_twin_focal_step, 0.0, 0.5);
+  CheckGreaterEqual("SubmapOptions.bootstrap_twin_check_keyframes", bootstrap_twin_check_keyframes, 3);
+  CheckInRange("SubmapOptions.bootstrap_twin_min_rms_gain", bootstrap_twin_min_rms_gain, 0.0, 0.9);
   CheckInRange("SubmapOptions.bootstrap_rotation_veto_pixels", bootstrap_rotation_veto_pixels, 0.1, 10.0);
   CheckGreaterEqual("SubmapOptions.min_tracking_inliers", min_tracking_inliers, 6);
   CheckInRange("SubmapOptions.max_view_angle_deg", max_view_angle_deg, 1.0, 180.0);

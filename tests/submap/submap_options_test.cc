@@ -38,6 +38,23 @@ TEST(SubmapOptions, RejectsBadFocalOptions) {
   EXPECT_NO_THROW(o.Check());
 }
 
+TEST(SubmapOptions, RejectsBadBootstrapTwinOptions) {
+  SubmapOptions o;
+  o.bootstrap_twin_focal_step = -0.1;
+  ExpectRejected(o, "bootstrap_twin_focal_step");
+  o.bootstrap_twin_focal_step = 0.6;  // a fraction of the focal, below the 0.8-1.25 the guess spans
+  ExpectRejected(o, "bootstrap_twin_focal_step");
+  o = {};
+  o.bootstrap_twin_check_keyframes = 2;  // the bootstrap's own two
+  ExpectRejected(o, "bootstrap_twin_check_keyframes");
+  o = {};
+  o.bootstrap_twin_min_rms_gain = 1.0;
+  ExpectRejected(o, "bootstrap_twin_min_rms_gain");
+  o = {};
+  o.bootstrap_twin_focal_step = 0;  // the paper: no check
+  EXPECT_NO_THROW(o.Check());
+}
+
 TEST(SubmapOptions, RejectsBadParallaxRules) {
   SubmapOptions o;
   o.max_keyframe_parallax_deg = -1;

@@ -42,6 +42,7 @@ ClipRun RunSubmapBuilderOnClip(const std::filesystem::path& video, const Intrins
   for (Submap& s : builder.Finish()) run.submaps.push_back(std::move(s));
   if (max_frames < 0) run.frames = source->frames_delivered();
   run.focal = builder.focal();
+  run.stats = builder.stats();
   return run;
 }
 

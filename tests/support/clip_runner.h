@@ -10,6 +10,7 @@
 #include "engine/core/camera.h"
 #include "engine/features/sift_extractor.h"
 #include "engine/map/submap.h"
+#include "engine/submap/submap_builder.h"
 #include "engine/submap/submap_options.h"
 
 namespace glam::test_support {
@@ -18,6 +19,7 @@ struct ClipRun {
   std::vector<Submap> submaps;
   std::int64_t frames = 0;  // frames fed to the builder
   double focal = 0;         // the builder's final focal estimate
+  SubmapBuilderStats stats;  // the builder's, after Finish()
 };
 
 // detection_interval: 0 = the product's automatic schedule, 1 = SIFT on every frame (paper).
