@@ -4,10 +4,11 @@
 // below tau_stereo or the mean triangulation angle exceeds alpha_stereo — but never before the
 // median angle reaches min_bootstrap_parallax_deg (triangulation below that is mostly noise).
 // If neither happens within max_bootstrap_frames, the best candidate with enough parallax is
-// taken, or the bootstrap restarts at the current frame.
+// taken, or the bootstrap restarts at the current frame. While the first submap estimates the
+// focal, the accepted pair is also solved at other focals (FocalTwin): nearly planar ground
+// has two motions, and which one the views give can depend on it (bootstrap_twin.cc).
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <numeric>
 #include <optional>
 

@@ -1,13 +1,16 @@
-// SubmapBuilder: the twin check of an ambiguous bootstrap (SubmapOptions::bootstrap_twin_*).
+// SubmapBuilder: the twin check of a focal-dependent first bootstrap
+// (SubmapOptions::bootstrap_twin_*).
 //
 // Two views of nearly planar ground admit two relative motions that explain the flow almost
 // equally well; the bootstrap's RANSAC picks the cheaper, and with a focal a few per cent off
 // that can be the wrong one. The two views cannot settle it, but a few more keyframes can: a
 // submap built on the wrong motion needs a bent ground and a wrong focal to explain them, and
-// its bundle adjustment keeps a clearly higher reprojection error. So the open submap is
-// tracked a second time from its first frame (the frames are still in memory), the bootstrap
-// steered to the other motion, and the build with the lower rms is kept. Split from
-// bootstrap.cc: this decides between two whole builds; that file makes one.
+// its bundle adjustment keeps a clearly higher reprojection error. So when the bootstrap's
+// views give another motion at another focal (SubmapBuilder::FocalTwin, bootstrap.cc), the
+// open submap is tracked a second time from its first frame (its frames are still in memory),
+// starting at that focal with the bootstrap steered to that motion, and the build with the
+// lower rms is kept. Split from bootstrap.cc: this decides between two whole builds; that file
+// makes one.
 #include <cmath>
 #include <utility>
 
@@ -69,7 +72,7 @@ void SubmapBuilder::CheckBootstrapTwin(std::vector<Submap>* completed) {
   const bool keep_twin = comparable && twin_rms > 0 &&
                          twin_rms < (1.0 - options_.bootstrap_twin_min_rms_gain) * chosen_rms;
   if (comparable) {
-      GLAM_LOG_INFO("bootstrap of the submap from frame {} depends on the focal (another motion at {:.1f} px): "
+    GLAM_LOG_INFO("bootstrap of the submap from frame {} depends on the focal (another motion at {:.1f} px): "
                   "tracked again to frame {} from there: rms {:.3f} px with {} keyframes (focal {:.1f} px) "
                   "against {:.3f} px with {} (focal {:.1f} px): {}",
                   first_frame, twin.focal, last_frame, twin_rms, open_.keyframes.size(), focal_, chosen_rms,
