@@ -12,6 +12,7 @@
 #include "engine/core/logging.h"
 #include "engine/core/median.h"
 #include "engine/core/options.h"
+#include "engine/core/placed_pose.h"
 #include "engine/geometry/triangulation.h"
 
 namespace glam {
@@ -23,22 +24,6 @@ struct Member {
   std::size_t submap = 0;
   std::size_t landmark = 0;
 };
-
-// cam_from_world of a keyframe posed in a submap placed by world_from_submap (a Sim3): the
-// metric pose, with the submap's scale folded into the translation.
-SE3 CamFromWorld(const SE3& cam_from_submap, const Sim3& world_from_submap) {
-  const SO3 rotation = cam_from_submap.rotation() * world_from_submap.rotation().Inverse();
-  return SE3(rotation, world_from_submap.scale() * cam_from_submap.translation() -
-                           (rotation * world_from_submap.translation()));
-}
-
-// The inverse: cam_from_submap in the submap's own units.
-SE3 CamFromSubmap(const SE3& cam_from_world, const Sim3& world_from_submap) {
-  return SE3(cam_from_world.rotation() * world_from_submap.rotation(),
-             (cam_from_world.rotation() * world_from_submap.translation() +
-              cam_from_world.translation()) /
-                 world_from_submap.scale());
-}
 
 bool SameLensModel(const Intrinsics& a, const Intrinsics& b) {
   return a.cx == b.cx && a.cy == b.cy && a.k1 == b.k1 && a.k2 == b.k2 &&
@@ -72,7 +57,7 @@ void ApplyToSubmap(Submap& submap, const Sim3& world_from_submap,
   std::vector<std::pair<std::int64_t, SE3>> corrections;
   for (std::size_t k = 0; k < submap.keyframes.size(); ++k) {
     Keyframe& keyframe = submap.keyframes[k];
-    const SE3 refined = CamFromSubmap(keyframe_cam_from_world[k], world_from_submap);
+    const SE3 refined = CamFromSubmap(world_from_submap, keyframe_cam_from_world[k]);
     corrections.emplace_back(keyframe.frame_index, refined.Inverse() * keyframe.cam_from_submap);
     keyframe.cam_from_submap = refined;
   }
@@ -204,7 +189,7 @@ class JointProblem {
         const auto [it, inserted] = camera_of_frame.emplace(keyframe.frame_index, cameras_.size());
         if (inserted) {
           Keyframe camera = keyframe;
-          camera.cam_from_submap = CamFromWorld(keyframe.cam_from_submap, world_from_submap_[i]);
+          camera.cam_from_submap = CamFromWorld(world_from_submap_[i], keyframe.cam_from_submap);
           cameras_.push_back(camera);
         } else {
           ++shared_keyframes_;

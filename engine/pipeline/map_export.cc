@@ -59,12 +59,6 @@ void AddFramePoses(const Submap& submap, const Sim3& frame_from_submap, ChosenPo
   }
 }
 
-SE3 WorldFromCam(const Sim3& world_from_submap, const SE3& cam_from_submap) {
-  const SE3 submap_from_cam = cam_from_submap.Inverse();
-  return SE3(world_from_submap.rotation() * submap_from_cam.rotation(),
-             world_from_submap * submap_from_cam.translation());
-}
-
 std::vector<PlacedSubmap> MapSubmaps(const MapSnapshot& snapshot) {
   std::vector<PlacedSubmap> map;
   for (const SubmapPlacement& placement : snapshot.submaps) {

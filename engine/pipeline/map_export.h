@@ -21,17 +21,13 @@
 #include <utility>
 #include <vector>
 
+#include "engine/core/placed_pose.h"
 #include "engine/core/se3.h"
 #include "engine/core/sim3.h"
 #include "engine/map/map_snapshot.h"
 #include "engine/map/submap.h"
 
 namespace glam {
-
-// world_from_cam of a frame posed in a submap. TUM carries no scale, so the rotation is
-// R_world_from_submap * R_submap_from_cam and the translation is the Sim3 applied to the
-// camera centre (the camera's world position).
-SE3 WorldFromCam(const Sim3& world_from_submap, const SE3& cam_from_submap);
 
 // Frame index -> (frame_from_cam, posed by PnP) of the frames a model's submaps pose.
 using ChosenPoses = std::map<std::int64_t, std::pair<SE3, bool>>;

@@ -13,6 +13,7 @@
 #include "engine/alignment/global_refinement.h"
 #include "engine/core/camera.h"
 #include "engine/core/error.h"
+#include "engine/core/placed_pose.h"
 
 namespace glam {
 namespace {
@@ -52,18 +53,6 @@ std::vector<Eigen::Vector3d> TruePoints() {
 
 // cam_from_submap of a camera whose metric world pose is cam_from_world, in a submap that the
 // world sees through world_from_submap: x_cam = R (s R_s x + t_s) + t, divided by s.
-SE3 InSubmap(const SE3& cam_from_world, const Sim3& world_from_submap) {
-  const double s = world_from_submap.scale();
-  return SE3(cam_from_world.rotation() * world_from_submap.rotation(),
-             (cam_from_world.rotation() * world_from_submap.translation() + cam_from_world.translation()) / s);
-}
-
-SE3 InWorld(const SE3& cam_from_submap, const Sim3& world_from_submap) {
-  const SO3 rotation = cam_from_submap.rotation() * world_from_submap.rotation().Inverse();
-  return SE3(rotation, world_from_submap.scale() * cam_from_submap.translation() -
-                           rotation * world_from_submap.translation());
-}
-
 // A submap of keyframes at `keyframe_frames` and every frame in [first, last], exact in the
 // frame `world_from_submap`, observing every true point that projects into >= 2 keyframes;
 // landmark ids are the point indices + id_offset.
@@ -76,11 +65,11 @@ Submap MakeSubmap(std::uint32_t id, const std::vector<std::int64_t>& keyframe_fr
   submap.last_frame = last;
   submap.intrinsics = lens;
   for (const std::int64_t frame : keyframe_frames) {
-    submap.keyframes.push_back({frame, InSubmap(TrueCamFromWorld(CentreX(frame)), world_from_submap), lens.fx});
+    submap.keyframes.push_back({frame, CamFromSubmap(world_from_submap, TrueCamFromWorld(CentreX(frame))), lens.fx});
   }
   for (std::int64_t frame = first; frame <= last; ++frame) {
     submap.frame_poses.push_back(
-        {frame, frame / 30.0, InSubmap(TrueCamFromWorld(CentreX(frame)), world_from_submap), 100});
+        {frame, frame / 30.0, CamFromSubmap(world_from_submap, TrueCamFromWorld(CentreX(frame))), 100});
   }
   const Camera camera(lens);
   const std::vector<Eigen::Vector3d> points = TruePoints();
@@ -137,7 +126,7 @@ template <typename Error>
 double WorstOverFrames(const Scene& scene, Error error) {
   double worst = 0;
   for (const FramePose& pose : scene.submaps[1].frame_poses) {
-    const SE3 cam_from_world = InWorld(pose.cam_from_submap, scene.world_from_submap[1]);
+    const SE3 cam_from_world = CamFromWorld(scene.world_from_submap[1], pose.cam_from_submap);
     const Eigen::Vector3d centre = -(cam_from_world.rotation().Inverse() * cam_from_world.translation());
     worst = std::max(worst, error(pose.frame_index, cam_from_world, centre));
   }
@@ -212,8 +201,8 @@ TEST(GlobalRefinement, AKeyframeOfTheSameFrameInBothSubmapsIsOneCamera) {
   // One shared camera fixes submap 1's pose but not its scale (a Sim3 about that camera keeps
   // all of submap 1's reprojections): the cameras' rotations are right again and their
   // centres back on the flight line, at a distance from frame 60 only the scale can get wrong.
-  const SE3 world_60_a = InWorld(scene.submaps[0].keyframes.back().cam_from_submap, scene.world_from_submap[0]);
-  const SE3 world_60_b = InWorld(scene.submaps[1].keyframes.front().cam_from_submap, scene.world_from_submap[1]);
+  const SE3 world_60_a = CamFromWorld(scene.world_from_submap[0], scene.submaps[0].keyframes.back().cam_from_submap);
+  const SE3 world_60_b = CamFromWorld(scene.world_from_submap[1], scene.submaps[1].keyframes.front().cam_from_submap);
   EXPECT_LT((world_60_a.matrix() - world_60_b.matrix()).norm(), 1e-6);
   EXPECT_LT(WorstRotationErrorDeg(scene), 1e-3);
   EXPECT_LT(WorstOffLineError(scene), 0.01);

@@ -9,23 +9,16 @@
 
 #include "engine/alignment/submap_verifier.h"
 #include "engine/core/error.h"
+#include "engine/core/placed_pose.h"
 
 namespace glam {
 namespace {
 
 // A camera looking down from 100 m over world x = 4 m per frame, slightly rolled per frame.
-SE3 CamFromWorld(int frame) {
+SE3 TrueCamFromWorld(int frame) {
   const SO3 rotation = SO3::Exp(Eigen::Vector3d(M_PI + 0.01 * frame, 0.02, 0.005 * frame));
   const Eigen::Vector3d centre(4.0 * frame, 1.0, 100.0);
   return SE3(rotation, -(rotation * centre));
-}
-
-// cam_from_submap for a submap whose frame relates to the world by world_from_submap:
-// cam_from_world (s R x + t) in world units, divided by s to stay in the submap's units.
-SE3 CamFromSubmap(const SE3& cam_from_world, const Sim3& world_from_submap) {
-  const double s = world_from_submap.scale();
-  return SE3(cam_from_world.rotation() * world_from_submap.rotation(),
-             (cam_from_world.rotation() * world_from_submap.translation() + cam_from_world.translation()) / s);
 }
 
 Submap MakeSubmap(std::uint32_t id, int first, int last, const Sim3& world_from_submap) {
@@ -37,7 +30,7 @@ Submap MakeSubmap(std::uint32_t id, int first, int last, const Sim3& world_from_
   for (int f = first; f <= last; ++f) {
     FramePose pose;
     pose.frame_index = f;
-    pose.cam_from_submap = CamFromSubmap(CamFromWorld(f), world_from_submap);
+    pose.cam_from_submap = CamFromSubmap(world_from_submap, TrueCamFromWorld(f));
     s.frame_poses.push_back(pose);
     if (f == first || f == last) s.keyframes.push_back({f, pose.cam_from_submap, 500.0});
   }

@@ -15,25 +15,6 @@
 namespace glam {
 namespace {
 
-TEST(MapExport, WorldFromCamComposesSim3AndCameraPose) {
-  const Sim3 world_from_submap(3.0, SO3::Exp(Eigen::Vector3d(0.1, -0.2, 0.5)), Eigen::Vector3d(4, 5, 6));
-  const SE3 cam_from_submap(SO3::Exp(Eigen::Vector3d(-0.3, 0.4, 0.2)), Eigen::Vector3d(1, -2, 0.5));
-  const SE3 world_from_cam = WorldFromCam(world_from_submap, cam_from_submap);
-  // Camera centre: the camera-frame origin maps to the camera's world position.
-  const Eigen::Vector3d centre_submap = cam_from_submap.Inverse().translation();
-  EXPECT_LT((world_from_cam.translation() - world_from_submap * centre_submap).norm(), 1e-12);
-  // Directions: a viewing ray in the camera frame maps like world_from_submap's rotation.
-  const Eigen::Vector3d ray_cam(0.2, -0.1, 1.0);
-  const Eigen::Vector3d ray_submap = cam_from_submap.Inverse().rotation() * ray_cam;
-  const Eigen::Vector3d expected = world_from_submap.rotation() * ray_submap;
-  EXPECT_LT((world_from_cam.rotation() * ray_cam - expected).norm(), 1e-12);
-  // A point seen by the camera lands where the Sim3 puts it, up to the scale along the ray.
-  const Eigen::Vector3d p_submap(3, 1, 7);
-  const Eigen::Vector3d p_world = world_from_submap * p_submap;
-  const Eigen::Vector3d p_cam = cam_from_submap * p_submap;
-  EXPECT_LT((world_from_cam * (3.0 * p_cam) - p_world).norm(), 1e-9);
-}
-
 Submap FrameOnlySubmap(std::uint32_t id, std::int64_t first, std::int64_t last, double x) {
   return glam::testing::PosedSubmap(id, first, last, [x](std::int64_t) { return Eigen::Vector3d(x, 0, 0); });
 }
