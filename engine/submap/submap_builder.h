@@ -41,8 +41,8 @@ struct SubmapBuilderStats {
   std::int64_t tracking_losses = 0;
   std::int64_t frames_rotation_only = 0;  // posed by rotation only (SubmapOptions::hover_max_speed)
   std::int64_t submap_rebuilds = 0;  // open submaps tracked again after a focal or k1 change
-  // SubmapOptions::bootstrap_twin_*: open submaps tracked again from the other motion of an
-  // ambiguous bootstrap, and how many of those builds were kept.
+  // SubmapOptions::bootstrap_twin_*: open submaps tracked again from the other motion of a
+  // focal-dependent bootstrap, and how many of those builds were kept.
   std::int64_t bootstrap_twin_checks = 0;
   std::int64_t bootstrap_twins_kept = 0;
   double bundle_adjust_seconds = 0;
@@ -174,9 +174,9 @@ class SubmapBuilder {
   // (open_.bootstrap_direction); only while the first submap estimates the focal.
   std::optional<OpenSubmap::Twin> FocalTwin(const FrameRecord& first, const FrameRecord& second,
                                             const std::vector<Match>& matches) const;
-  // bootstrap_twin.cc (SubmapOptions::bootstrap_twin_*): whether the open submap's ambiguous
-  // bootstrap is due for its check, and the check itself (the open submap is tracked again
-  // from the other motion; the better build is kept).
+  // bootstrap_twin.cc (SubmapOptions::bootstrap_twin_*): whether the open submap's
+  // focal-dependent bootstrap is due for its check, and the check itself (the open submap is
+  // tracked again from the other motion; the better build is kept).
   bool BootstrapTwinCheckDue() const;
   void CheckBootstrapTwin(std::vector<Submap>* completed);
   BuilderState SaveState() const;

@@ -9,11 +9,13 @@
 // found the wrong one again: 1.9 m ATE, 68 % posed, 0.08 m and 100 % with the check.)
 // Started at the true focal, the check runs too (the views give another motion at 15 % less)
 // and must keep the first build.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
 #include <gtest/gtest.h>
 
+#include "engine/pipeline/mapping_options.h"
 #include "engine/submap/submap_builder.h"
 #include "tests/support/clip_runner.h"
 #include "tests/support/submap_accuracy.h"
@@ -21,14 +23,12 @@
 namespace glam {
 namespace {
 
-std::filesystem::path FixtureDir(const char* name) {
-  return std::filesystem::path(GLAM_TEST_FIXTURES_DIR) / name;
-}
+const std::filesystem::path kClip = std::filesystem::path(GLAM_TEST_FIXTURES_DIR) / "oblique60";
 
-// The CLI's guess without a calibration: 0.8 x the long side.
+// The product's guess without a calibration (0.8 x the long side).
 Intrinsics UncalibratedGuess(const Intrinsics& truth) {
   Intrinsics guess = truth;
-  guess.fx = guess.fy = 0.8 * std::max(truth.width, truth.height);
+  guess.fx = guess.fy = MappingOptions().default_focal_factor * std::max(truth.width, truth.height);
   return guess;
 }
 
@@ -41,7 +41,7 @@ struct Outcome {
 
 // Thread 1 over the clip from `start` with the default options (the focal estimated).
 Outcome MapClip(const Intrinsics& start) {
-  const test_support::ClipTruth truth = test_support::LoadClipTruth(FixtureDir("oblique60"));
+  const test_support::ClipTruth truth = test_support::LoadClipTruth(kClip);
   Outcome out;
   out.run = test_support::RunSubmapBuilderOnClip(truth.video, start, SubmapOptions{}, 0);
   out.focal_error = (out.run.focal - truth.intrinsics.fx) / truth.intrinsics.fx;
@@ -70,7 +70,7 @@ void ExpectAccurate(const Outcome& outcome) {
 }
 
 TEST(BootstrapTwin, AFirstSubmapBootstrappedOnTheWrongMotionIsBuiltAgainFromTheOther) {
-  const test_support::ClipTruth truth = test_support::LoadClipTruth(FixtureDir("oblique60"));
+  const test_support::ClipTruth truth = test_support::LoadClipTruth(kClip);
   const Outcome guessed = MapClip(UncalibratedGuess(truth.intrinsics));
   EXPECT_EQ(guessed.run.stats.bootstrap_twin_checks, 1);  // once per run: the first submap
   EXPECT_EQ(guessed.run.stats.bootstrap_twins_kept, 1);
@@ -78,7 +78,7 @@ TEST(BootstrapTwin, AFirstSubmapBootstrappedOnTheWrongMotionIsBuiltAgainFromTheO
 }
 
 TEST(BootstrapTwin, ABootstrapOnTheRightMotionKeepsTheFirstBuild) {
-  const test_support::ClipTruth truth = test_support::LoadClipTruth(FixtureDir("oblique60"));
+  const test_support::ClipTruth truth = test_support::LoadClipTruth(kClip);
   const Outcome started_right = MapClip(truth.intrinsics);  // focal still estimated
   EXPECT_EQ(started_right.run.stats.bootstrap_twin_checks, 1);
   EXPECT_EQ(started_right.run.stats.bootstrap_twins_kept, 0);
