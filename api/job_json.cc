@@ -114,6 +114,12 @@ JobOptions ParseJobOptions(const json& j) {
         throw InputError(fmt::format("options.max_features must be in [{}, {}], got {}", kMinMaxFeatures,
                                      kMaxMaxFeatures, *o.max_features));
       }
+    } else if (key == "global_refinement_keyframes") {
+      o.global_refinement_keyframes = GetInt(value, "global_refinement_keyframes");
+      if (*o.global_refinement_keyframes < 0 || *o.global_refinement_keyframes > kMaxGlobalRefinementKeyframes) {
+        throw InputError(fmt::format("options.global_refinement_keyframes must be in [0, {}] (0 = never), got {}",
+                                     kMaxGlobalRefinementKeyframes, *o.global_refinement_keyframes));
+      }
     } else if (key == "smooth_window_s") {
       o.smooth_window_s = GetNumber(value, "smooth_window_s");
       if (!(*o.smooth_window_s >= 0 && *o.smooth_window_s <= 5)) {
@@ -124,7 +130,7 @@ JobOptions ParseJobOptions(const json& j) {
       throw InputError(fmt::format(
           "options: unknown key \"{}\" (known: name, stride, focal, intrinsics, "
           "keyframes_per_submap, max_image_size, detect_every, fixed_k1, smooth_window_s, name_order, "
-          "refine_focal, max_features)",
+          "refine_focal, max_features, global_refinement_keyframes)",
           key));
     }
   }
@@ -161,6 +167,7 @@ json ToJson(const JobOptions& o) {
   if (o.name_order) j["name_order"] = *o.name_order;
   if (o.refine_focal) j["refine_focal"] = *o.refine_focal;
   if (o.max_features) j["max_features"] = *o.max_features;
+  if (o.global_refinement_keyframes) j["global_refinement_keyframes"] = *o.global_refinement_keyframes;
   return j;
 }
 
@@ -177,6 +184,7 @@ MappingOptions ToMappingOptions(const JobOptions& o) {
   if (o.fixed_k1 && *o.fixed_k1) m.submap.bundle_adjustment.refine_k1 = false;  // as --fixed-k1
   if (o.smooth_window_s) m.submap.centre_smoothing.half_window_s = *o.smooth_window_s;
   if (o.name_order && *o.name_order) m.source.photos_by_capture_time = false;  // as --name-order
+  if (o.global_refinement_keyframes) m.global_refinement.max_keyframes = *o.global_refinement_keyframes;
   m.Check();
   return m;
 }

@@ -26,9 +26,8 @@ bool SubmapBuilder::BootstrapTwinCheckDue() const {
 }
 
 SubmapBuilder::BuilderState SubmapBuilder::SaveState() const {
-  return BuilderState{open_,   focal_,          k1_,
-                      completed_keyframe_focals_, previous_tail_, options_,
-                      next_submap_id_, camera_decisions_open_, stats_};
+  return BuilderState{open_,    focal_,          k1_,    completed_keyframe_focals_, previous_tail_,
+                      options_, next_submap_id_, camera_decisions_open_, stats_};
 }
 
 void SubmapBuilder::RestoreState(BuilderState state) {

@@ -66,6 +66,12 @@ TEST(JobJson, ParsesOptionsAndMapsThemToEngineOptions) {
   EXPECT_EQ(ToMappingOptions(features).sift.max_features, 4000);
   EXPECT_EQ(ToMappingOptions(JobOptions{}).sift.max_features, SiftOptions{}.max_features);
   EXPECT_EQ(ToJson(features), json::parse(R"({"max_features": 4000})"));
+  // global_refinement_keyframes bounds the end-of-run refinement (0 = rigid submaps).
+  const JobOptions rigid = ParseJobOptionsText(R"({"global_refinement_keyframes": 0})");
+  EXPECT_EQ(ToMappingOptions(rigid).global_refinement.max_keyframes, 0);
+  EXPECT_EQ(ToMappingOptions(JobOptions{}).global_refinement.max_keyframes,
+            GlobalRefinementOptions{}.max_keyframes);
+  EXPECT_EQ(ToJson(rigid), json::parse(R"({"global_refinement_keyframes": 0})"));
   // Round trip through the stored JSON.
   const JobOptions back = ParseJobOptions(ToJson(o));
   EXPECT_EQ(ToJson(back), ToJson(o));
@@ -94,6 +100,10 @@ TEST(JobJson, RejectsBadOptionsWithTheKeyInTheMessage) {
   EXPECT_NE(message(R"({"max_features": 99})").find("max_features"), std::string::npos);
   EXPECT_NE(message(R"({"max_features": 50001})").find("max_features"), std::string::npos);
   EXPECT_NE(message(R"({"max_features": 2000.5})").find("max_features"), std::string::npos);
+  EXPECT_NE(message(R"({"global_refinement_keyframes": -1})").find("global_refinement_keyframes"),
+            std::string::npos);
+  EXPECT_NE(message(R"({"global_refinement_keyframes": 1001})").find("global_refinement_keyframes"),
+            std::string::npos);
   EXPECT_NE(message(R"({"smooth_window_s": -0.1})").find("smooth_window_s"), std::string::npos);
   EXPECT_NE(message(R"({"smooth_window_s": 6})").find("smooth_window_s"), std::string::npos);
   EXPECT_NE(message(R"({"smooth_window_s": "0.5"})").find("smooth_window_s"), std::string::npos);

@@ -239,6 +239,8 @@ async function main() {
     check(!/[?&]job=/.test(page.url()), 'refine_focal without intrinsics was refused by the form, no job created');
     await page.uncheck('#upload-form input[name=refine_focal]');
     await page.fill('#upload-form input[name=max_features]', String(MAX_FEATURES));
+    // The default (400), so the job maps as it would without it.
+    await page.fill('#upload-form input[name=global_refinement_keyframes]', '400');
     const t0 = Date.now();
     await page.click('#upload-form button[type=submit]');
     await page.waitForURL(/[?&]job=[0-9a-f]{16}/, { timeout: 60_000 });
@@ -394,6 +396,8 @@ async function main() {
       `the form's path smoothing reached the job: options.smooth_window_s ${job.options && job.options.smooth_window_s} == ${SMOOTH_WINDOW_S}`);
     check(job.options && job.options.max_features === MAX_FEATURES && !('refine_focal' in job.options),
       `the form's feature budget reached the job, the unticked boxes did not: options ${JSON.stringify(job.options)}`);
+    check(job.options && job.options.global_refinement_keyframes === 400,
+      `the form's refinement limit reached the job: options.global_refinement_keyframes ${job.options && job.options.global_refinement_keyframes}`);
     // Disconnected parts (usually none on this clip) are linked with the job JSON's URLs.
     const shownParts = await page.$$eval(`#jobs tr[data-id="${jobId}"] .part a`, (els) => els.map((e) => new URL(e.href).pathname));
     const expectedParts = (job.parts || []).flatMap((p) => [p.urls.trajectory, p.urls.points]);

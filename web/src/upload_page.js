@@ -46,7 +46,7 @@ async function collectOptions(form) {
   }
   if (intrinsicsFile) options.intrinsics = await readIntrinsics(intrinsicsFile);
   for (const [key, min, max] of [['stride', 1], ['keyframes_per_submap', 3], ['max_image_size', 0], ['detect_every', 0],
-    ['max_features', 100, 50000]]) {
+    ['max_features', 100, 50000], ['global_refinement_keyframes', 0, 1000]]) {
     const text = form.elements[key].value.trim();
     if (!text) continue;
     const n = Number(text);
