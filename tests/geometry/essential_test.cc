@@ -140,12 +140,7 @@ TEST(Essential, NadirViewsOfFlatGroundGiveTheTrueMotion) {
   EXPECT_EQ(wrong, 0);
 }
 
-// Oblique views (30 deg from nadir) of gently rolling ground from 60 m, 640x360 field of view
-// (focal 554 px), 0.5 px noise, a turning flight (yaw changes by up to 18 deg between the
-// views): the setting in which `glam map` bootstrapped from the wrong of two near-equivalent
-// motions (3.1 instead of 9.3 deg parallax on the 600-frame oblique benchmark video). Five-point
-// samples of such scenes often fall into the wrong motion's basin; EstimateRelativePose also
-// refines the homography's decompositions, which reach the right one.
+// Focal (px) of the oblique views' 640x360 camera (60 degrees horizontal field of view).
 constexpr double kObliqueFocal = 554.0;
 
 // Two views 30 deg from nadir at 60 m of the ground z = ground(x, y), 640x360 field of view
