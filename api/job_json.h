@@ -53,8 +53,9 @@ inline constexpr int kMaxGlobalRefinementKeyframes = 1000;
 
 // Accepts an object with the keys name, stride, focal, intrinsics, keyframes_per_submap,
 // max_image_size, detect_every, fixed_k1, smooth_window_s, name_order, refine_focal,
-// max_features, global_refinement_keyframes (all optional). Throws InputError naming the key for unknown keys, wrong types
-// or out-of-range values (the resulting MappingOptions are Check()ed as well).
+// max_features, global_refinement_keyframes (all optional). Throws InputError naming the key
+// for unknown keys, wrong types or out-of-range values (the resulting MappingOptions are
+// Check()ed as well).
 JobOptions ParseJobOptions(const nlohmann::json& j);
 // Parses text as JSON first (InputError "options: malformed JSON ...").
 JobOptions ParseJobOptionsText(const std::string& text);

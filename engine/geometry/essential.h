@@ -7,6 +7,7 @@
 // (R, t) is cam2_from_cam1; |t| = 1 (scale is unobservable).
 #pragma once
 
+#include <cmath>
 #include <optional>
 #include <span>
 #include <vector>
@@ -100,6 +101,11 @@ struct RelativePoseResult {
 // Motions whose camera-2 centre directions (seen from camera 1) differ by more than this are
 // in different basins (the two motions of a nearly planar scene differ by tens of degrees).
 inline constexpr double kDistinctMotionDeg = 10.0;
+
+// Whether two motions, given as unit camera-2 centre directions, lie in different basins.
+inline bool DistinctMotions(const Eigen::Vector3d& centre_direction_a, const Eigen::Vector3d& centre_direction_b) {
+  return centre_direction_a.dot(centre_direction_b) < std::cos(kDistinctMotionDeg * M_PI / 180.0);
+}
 
 // Steers EstimateRelativePose between near-equivalent motions: among the candidates whose MSAC
 // cost is at most max_cost_ratio times the lowest, the one whose camera-2 centre direction

@@ -8,6 +8,7 @@
 
 #include "engine/alignment/world_leveling.h"
 #include "engine/core/error.h"
+#include "engine/core/placed_pose.h"
 #include "engine/export/ply_points.h"
 #include "engine/export/tum_trajectory.h"
 #include "engine/map/submap_io.h"

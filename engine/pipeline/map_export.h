@@ -21,7 +21,6 @@
 #include <utility>
 #include <vector>
 
-#include "engine/core/placed_pose.h"
 #include "engine/core/se3.h"
 #include "engine/core/sim3.h"
 #include "engine/map/map_snapshot.h"

@@ -70,7 +70,6 @@ std::optional<SubmapBuilder::OpenSubmap::Twin> SubmapBuilder::FocalTwin(const Fr
       !open_.bootstrap_direction) {
     return std::nullopt;
   }
-  const double distinct_cos = std::cos(kDistinctMotionDeg / kRadToDeg);
   for (const double scale : {1.0 - step, 1.0 + step}) {
     Intrinsics intrinsics = CurrentCamera().intrinsics();
     intrinsics.fx *= scale;
@@ -79,7 +78,7 @@ std::optional<SubmapBuilder::OpenSubmap::Twin> SubmapBuilder::FocalTwin(const Fr
                                                         intrinsics.fx, BootstrapRansacOptions(), kMaxDepthBaselines);
     if (!rel.success) continue;
     const Eigen::Vector3d direction = CameraCenter(rel.cam2_from_cam1).normalized();
-    if (direction.dot(*open_.bootstrap_direction) >= distinct_cos) continue;
+    if (!DistinctMotions(direction, *open_.bootstrap_direction)) continue;
     GLAM_LOG_DEBUG("bootstrap frames {} and {}: at focal {:.1f} px the views give another motion (centre "
                    "direction {:.1f} deg from the one at {:.1f} px)",
                    first.index, second.index, intrinsics.fx,

@@ -11,7 +11,6 @@
 // starting at that focal with the bootstrap steered to that motion, and the build with the
 // lower rms is kept. Split from bootstrap.cc: this decides between two whole builds; that file
 // makes one.
-#include <cmath>
 #include <utility>
 
 #include "engine/core/logging.h"
@@ -50,7 +49,7 @@ void SubmapBuilder::CheckBootstrapTwin(std::vector<Submap>* completed) {
   const std::int64_t first_frame = open_.frames.front().index;
   const std::int64_t last_frame = open_.frames.back().index;
   // A copy (the frames' features included, ~0.3 MB per frame at 2000 features): the first
-  // build comes back unchanged when the second is not better.
+  // build comes back unchanged when the second is not better. The replay takes the live frames.
   BuilderState saved = SaveState();
   const std::size_t completed_before = completed->size();
 
@@ -58,15 +57,14 @@ void SubmapBuilder::CheckBootstrapTwin(std::vector<Submap>* completed) {
   // then move it as usual).
   focal_ = twin.focal;
   const RestartCarry carry{open_.rebuilds, twin.direction, /*bootstrap_twin_checked=*/true};
-  RestartWith(std::deque<FrameRecord>(open_.frames), carry, completed);
+  RestartWith(std::move(open_.frames), carry, completed);
 
   // The second build counts only if it is still one open submap over the same frames (no
   // tracking loss or completion on the way) that bootstrapped on the other motion.
-  const double distinct_cos = std::cos(kDistinctMotionDeg * M_PI / 180.0);
   const bool comparable = completed->size() == completed_before && open_.bootstrapped &&
                           !open_.frames.empty() && open_.frames.front().index == first_frame &&
                           open_.keyframes.size() >= 3 && open_.bootstrap_direction &&
-                          open_.bootstrap_direction->dot(chosen) < distinct_cos;
+                          DistinctMotions(*open_.bootstrap_direction, chosen);
   const double twin_rms = open_.last_ba_rms;
   const bool keep_twin = comparable && twin_rms > 0 &&
                          twin_rms < (1.0 - options_.bootstrap_twin_min_rms_gain) * chosen_rms;

@@ -12,6 +12,7 @@
 
 #include <gtest/gtest.h>
 
+#include "engine/core/placed_pose.h"
 #include "engine/geo/geodetic.h"
 #include "engine/map/submap_io.h"
 #include "engine/pipeline/map_export.h"
