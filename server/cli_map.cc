@@ -207,6 +207,10 @@ void RegisterMapCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--klt-levels", args->options.klt.pyramid_levels, "KLT pyramid levels above the image")
       ->capture_default_str();
+  cmd->add_option("--rolling-shutter-ms", args->options.rolling_shutter.readout_ms,
+                  "The camera's rolling-shutter readout time (ms, first to last image row): "
+                  "keypoints are corrected for the motion during readout; 0 = global shutter")
+      ->capture_default_str();
   cmd->add_option("--max-features", args->options.sift.max_features,
                   fmt::format("SIFT features per frame (image folders: {})", kPhotoFolderMaxFeatures))
       ->capture_default_str()

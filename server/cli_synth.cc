@@ -42,6 +42,10 @@ void RegisterSynthCommand(CLI::App& app) {
   cmd->add_option("--focal", options->focal, "Focal length (px); 0 = 60 deg horizontal FOV")->capture_default_str();
   cmd->add_option("--k1", options->k1, "Radial distortion k1")->capture_default_str();
   cmd->add_option("--k2", options->k2, "Radial distortion k2")->capture_default_str();
+  cmd->add_option("--rolling-shutter-ms", options->rolling_shutter_ms,
+                  "Rolling shutter: readout time from the top row to the bottom row (ms), at most one "
+                  "frame interval; 0 = global shutter. Ground truth is the middle row's pose")
+      ->capture_default_str();
   cmd->add_option("--seed", options->seed, "World and flight seed")->capture_default_str();
   cmd->add_option("--relief", options->relief, "Terrain relief amplitude (m)")->capture_default_str();
   cmd->add_option("--cell-size", options->cell_size, "Ground-truth heightfield cell (m)")->capture_default_str();

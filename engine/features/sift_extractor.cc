@@ -141,6 +141,10 @@ Features SiftExtractor::Extract(const cv::Mat& image) const {
     }
   }
 
+  // class_id = index in this detection frame: KLT keeps it, so the frames propagated from
+  // here name their keypoints by it (rolling-shutter correction finds a point's track by it).
+  for (std::size_t i = 0; i < features.keypoints.size(); ++i) features.keypoints[i].class_id = static_cast<int>(i);
+
   features.colors.reserve(features.keypoints.size());
   for (const auto& kp : features.keypoints) {
     const int x = std::clamp(static_cast<int>(std::lround(kp.pt.x)), 0, image.cols - 1);

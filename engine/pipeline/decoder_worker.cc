@@ -7,6 +7,7 @@
 #include <optional>
 #include <thread>
 
+#include "engine/core/logging.h"
 #include "engine/core/options.h"
 #include "engine/core/thread_name.h"
 #include "engine/features/gray_image.h"
@@ -27,6 +28,7 @@ void FeatureStageOptions::Check() const {
   klt.Check();
   CheckInRange("FeatureStageOptions.workers", workers, 1, 16);
   CheckInRange("FeatureStageOptions.detection_interval", detection_interval, 1, 1000);
+  rolling_shutter.Check();
 }
 
 DecoderWorker::DecoderWorker(FrameSource& source, const FeatureStageOptions& options,
@@ -44,6 +46,14 @@ DecoderWorker::DecoderWorker(FrameSource& source, const FeatureStageOptions& opt
   const int extractors =
       options_.detection_interval > 1 && options_.workers > 1 ? options_.workers + 1 : options_.workers;
   for (int i = 0; i < extractors; ++i) extractors_.emplace_back(options_.sift);
+  if (options_.rolling_shutter.enabled()) {
+    if (options_.detection_interval > 1) {
+      rolling_shutter_.emplace(options_.rolling_shutter, source_.info().processing_size);
+    } else {
+      GLAM_LOG_WARN("rolling shutter: not corrected when SIFT runs on every frame (no KLT tracks to "
+                    "measure the image motion)");
+    }
+  }
 }
 
 void DecoderWorker::Run() {
@@ -53,6 +63,12 @@ void DecoderWorker::Run() {
     } else {
       RunWithPropagation();
     }
+    if (rolling_shutter_ && !ShouldStop()) {
+      if (std::optional<FrameFeatures> last = rolling_shutter_->Flush()) Forward(std::move(*last));
+      GLAM_LOG_INFO("rolling shutter ({} ms readout): keypoints moved {:.2f} px on average, {:.1f} px at most",
+                    options_.rolling_shutter.readout_ms, rolling_shutter_->mean_shift_px(),
+                    rolling_shutter_->max_shift_px());
+    }
   } catch (...) {
     error_ = std::current_exception();
   }
@@ -60,6 +76,12 @@ void DecoderWorker::Run() {
 }
 
 bool DecoderWorker::Emit(FrameFeatures item) {
+  if (!rolling_shutter_) return Forward(std::move(item));
+  std::optional<FrameFeatures> ready = rolling_shutter_->Push(std::move(item));
+  return !ready || Forward(std::move(*ready));
+}
+
+bool DecoderWorker::Forward(FrameFeatures item) {
   ++frames_;
   if (item.features.detected) ++frames_detected_;
   if (item.features.size() < options_.min_features) ++frames_without_features_;

@@ -23,6 +23,7 @@
 #include <deque>
 #include <exception>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "engine/core/bounded_queue.h"
@@ -30,15 +31,11 @@
 #include "engine/features/features.h"
 #include "engine/features/klt_propagator.h"
 #include "engine/features/sift_extractor.h"
+#include "engine/pipeline/frame_features.h"
+#include "engine/pipeline/rolling_shutter.h"
 #include "engine/video/frame_source.h"
 
 namespace glam {
-
-struct FrameFeatures {
-  std::int64_t index = 0;
-  double timestamp_s = 0;
-  Features features;
-};
 
 struct FeatureStageOptions {
   SiftOptions sift;
@@ -47,6 +44,9 @@ struct FeatureStageOptions {
   int detection_interval = 1;  // SIFT on every N-th frame, KLT in between (1 = every frame)
   // Frames with fewer features than this are counted as featureless (report warning).
   std::size_t min_features = 0;
+  // Keypoints corrected for the camera's rolling shutter (rolling_shutter.h) before they are
+  // handed on; needs KLT tracks (detection_interval > 1), ignored without.
+  RollingShutterOptions rolling_shutter;
 
   void Check() const;  // throws InputError
 };
@@ -81,13 +81,17 @@ class DecoderWorker {
   bool ReadAhead(std::deque<std::unique_ptr<DetectionBlock>>* blocks, std::size_t* blocks_started);
   std::vector<FrameFeatures> ExtractBatch(const std::vector<Frame>& batch);
   FrameFeatures Detect(const Frame& frame, std::size_t extractor) const;
+  // Hands a frame on: through the rolling-shutter corrector (one frame later) when there is
+  // one, then into the queue. False once the consumer closed the queue.
   bool Emit(FrameFeatures item);
+  bool Forward(FrameFeatures item);
   bool ShouldStop() const { return cancel_.IsCancelled() || stop_.load(); }
 
   FrameSource& source_;
   FeatureStageOptions options_;
   std::vector<SiftExtractor> extractors_;
   KltPropagator klt_;
+  std::optional<RollingShutterCorrector> rolling_shutter_;
   BoundedQueue<FrameFeatures>& queue_;
   CancellationToken cancel_;
   const std::atomic<bool>& stop_;

@@ -262,6 +262,7 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   feature_stage.workers = options.feature_workers;
   feature_stage.detection_interval = options.EffectiveDetectionInterval(info.fps);
   feature_stage.min_features = static_cast<std::size_t>(min_features);
+  feature_stage.rolling_shutter = options.rolling_shutter;
   report.detection_interval = feature_stage.detection_interval;
   DecoderWorker worker(*source, feature_stage, queue, cancel, stop);
   std::thread decoder([&worker] {

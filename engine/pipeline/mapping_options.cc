@@ -24,6 +24,7 @@ void MappingOptions::Check() const {
   CheckInRange("MappingOptions.feature_workers", feature_workers, 1, 16);
   CheckInRange("MappingOptions.detection_interval", detection_interval, 0, 1000);
   klt.Check();
+  rolling_shutter.Check();
   georeference.Check();
 }
 

@@ -11,6 +11,7 @@
 #include "engine/features/klt_propagator.h"
 #include "engine/geo/georeference.h"
 #include "engine/features/sift_extractor.h"
+#include "engine/pipeline/rolling_shutter.h"
 #include <filesystem>
 
 #include "engine/alignment/global_refinement.h"
@@ -63,6 +64,9 @@ struct MappingOptions {
   // whose fps is 1), taking the stride into account.
   int detection_interval = 0;
   KltOptions klt;
+  // The camera's rolling shutter: keypoints are moved to where they were at the frame's middle
+  // row (engine/pipeline/rolling_shutter.h). readout_ms = 0 (default): a global shutter.
+  RollingShutterOptions rolling_shutter;
   // Continue an interrupted run in the same out_dir: submaps already persisted there are
   // reloaded and decoding restarts at the first frame the next submap needs, instead of
   // mapping the whole input again (a server restart after a crash uses this).

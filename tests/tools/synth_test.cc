@@ -123,6 +123,41 @@ TEST(SynthRender, TrueSurfacePointsReprojectOntoTheSameTexture) {
   EXPECT_LT(Median(bad), 0.5);
 }
 
+// Rolling shutter: each image row is rendered from the pose at its own exposure time; the
+// frame's time (its ground-truth pose) is the middle row's.
+TEST(SynthRender, RollingShutterRowsSeeTheirOwnPose) {
+  SynthOptions o = SmallOptions();
+  o.speed = 20;  // 0.6 m over the readout at 50 m: ~2 px
+  o.rolling_shutter_ms = 30;
+  const int k = 10;
+  EXPECT_NEAR(0.5 * (o.RowTime(k, 0) + o.RowTime(k, o.height - 1)), k / o.fps, 1e-12);
+  EXPECT_NEAR(o.RowTime(k, o.height - 1) - o.RowTime(k, 0), 0.030, 1e-12);
+  const std::vector<SE3> poses = MakeTrajectory(o, Terrain(o));
+  // The same flight at any time: at the frame times it is MakeTrajectory's.
+  const std::vector<SE3> again = MakeTrajectoryAt(o, Terrain(o), {k / o.fps});
+  EXPECT_LT((again[0].translation() - poses[k].translation()).norm(), 1e-9);
+  std::vector<double> times;
+  for (int row = 0; row < o.height; ++row) times.push_back(o.RowTime(k, row));
+  const std::vector<SE3> rows = MakeTrajectoryAt(o, Terrain(o), times);
+  EXPECT_NEAR((rows.back().translation() - rows.front().translation()).norm(), 0.030 * o.speed, 0.01);
+
+  const World world = World::Generate(o, poses);
+  const Renderer renderer(world, MakeIntrinsics(o));
+  const cv::Mat rolling = renderer.Render(rows);
+  const cv::Mat from_top = renderer.Render(rows.front());
+  const cv::Mat from_middle = renderer.Render(poses[k]);
+  auto band_difference = [](const cv::Mat& a, const cv::Mat& b, int first_row) {
+    cv::Mat d;
+    cv::absdiff(a.rowRange(first_row, first_row + 6), b.rowRange(first_row, first_row + 6), d);
+    return cv::mean(d)[0];
+  };
+  // The top rows are the top row's view, not the middle row's.
+  EXPECT_LT(band_difference(rolling, from_top, 1), 1.0);
+  EXPECT_GT(band_difference(rolling, from_middle, 1), 4.0 * band_difference(rolling, from_top, 1) + 1.0);
+  // Rows near the middle are (nearly) the frame pose's view.
+  EXPECT_LT(band_difference(rolling, from_middle, o.height / 2 - 3), 1.0);
+}
+
 TEST(SynthRender, RayHitsLieOnTheHeightfieldAndAreTheFirstCrossing) {
   SynthOptions o = SmallOptions();
   o.frames = 2;
@@ -485,6 +520,8 @@ TEST(SynthOptions, CheckRejectsNonsense) {
   rejects([](SynthOptions& o) { o.climb_from = 30; o.climb_speed = 0; });
   rejects([](SynthOptions& o) { o.tilt_seconds = 4; o.tilt_from_deg = 85; });  // beyond the renderer's 80
   rejects([](SynthOptions& o) { o.tilt_seconds = -1; });
+  rejects([](SynthOptions& o) { o.rolling_shutter_ms = -1; });
+  rejects([](SynthOptions& o) { o.rolling_shutter_ms = 40; });  // longer than a frame at 30 fps
   EXPECT_THROW(ParseTrajectoryKind("zigzag"), InputError);
   EXPECT_EQ(ParseTrajectoryKind("orbit"), TrajectoryKind::kOrbit);
 }

@@ -6,6 +6,7 @@
 
 #include <opencv2/core/utility.hpp>
 
+#include "engine/core/error.h"
 #include "tools/synth/noise.h"
 
 namespace glam::synth {
@@ -150,15 +151,21 @@ Renderer::Sample Renderer::Shade(const Eigen::Vector3d& origin, const Eigen::Vec
 }
 
 cv::Mat Renderer::Render(const SE3& world_from_cam) const {
+  return Render(std::vector<SE3>(static_cast<std::size_t>(camera_.intrinsics().height), world_from_cam));
+}
+
+cv::Mat Renderer::Render(const std::vector<SE3>& world_from_cam_of_row) const {
   const int w = camera_.intrinsics().width;
   const int h = camera_.intrinsics().height;
-  const Eigen::Matrix3d rotation = world_from_cam.rotation().matrix();
-  const Eigen::Vector3d origin = world_from_cam.translation();
+  GLAM_CHECK(world_from_cam_of_row.size() == static_cast<std::size_t>(h),
+             "one pose per image row expected: {} poses for {} rows", world_from_cam_of_row.size(), h);
   cv::Mat color(h, w, CV_32FC3);
   std::vector<float> depth(static_cast<std::size_t>(w) * h);
   std::vector<unsigned char> material(depth.size());
   cv::parallel_for_(cv::Range(0, h), [&](const cv::Range& range) {
     for (int y = range.start; y < range.end; ++y) {
+      const Eigen::Matrix3d rotation = world_from_cam_of_row[y].rotation().matrix();
+      const Eigen::Vector3d origin = world_from_cam_of_row[y].translation();
       for (int x = 0; x < w; ++x) {
         const std::size_t k = static_cast<std::size_t>(y) * w + x;
         const Eigen::Vector3d dir = rotation * rays_[k].cast<double>();
@@ -174,6 +181,8 @@ cv::Mat Renderer::Render(const SE3& world_from_cam) const {
   static const double kOffsets[4][2] = {{-0.125, -0.375}, {0.375, -0.125}, {0.125, 0.375}, {-0.375, 0.125}};
   cv::parallel_for_(cv::Range(0, h), [&](const cv::Range& range) {
     for (int y = range.start; y < range.end; ++y) {
+      const Eigen::Matrix3d rotation = world_from_cam_of_row[y].rotation().matrix();
+      const Eigen::Vector3d origin = world_from_cam_of_row[y].translation();
       for (int x = 0; x < w; ++x) {
         const std::size_t k = static_cast<std::size_t>(y) * w + x;
         bool edge = false;

@@ -4,7 +4,8 @@
 // the pixel's footprint on the surface (no shimmer as the drone moves); pixels on depth or
 // material discontinuities (building silhouettes) are re-rendered with 4 extra sub-samples.
 // Shading is Lambertian under a fixed sun, so the appearance of a surface point never
-// changes over time. Rows are rendered in parallel (cv::parallel_for_).
+// changes over time. Rows are rendered in parallel (cv::parallel_for_), each from its own
+// pose if asked (a rolling shutter).
 #pragma once
 
 #include <vector>
@@ -24,6 +25,9 @@ class Renderer {
 
   // BGR 8-bit image of size intrinsics.width x intrinsics.height.
   cv::Mat Render(const SE3& world_from_cam) const;
+  // The same under a rolling shutter: image row y is seen from world_from_cam_of_row[y]
+  // (one pose per row, the camera where it was when that row was exposed).
+  cv::Mat Render(const std::vector<SE3>& world_from_cam_of_row) const;
 
  private:
   struct Sample {

@@ -83,8 +83,28 @@ SynthReport RunSynth(const SynthOptions& o) {
   const Renderer renderer(world, intrinsics);
   VideoWriter video(dir / "video.mp4", o.width, o.height, o.fps, o.crf);
   const int log_every = std::max(1, static_cast<int>(o.fps * 5));
+  // Rolling shutter: one pose per image row, computed for a block of frames at a time (the
+  // flight's path is planned once per block; ~1 M poses = 56 MB at most).
+  const bool rolling = o.rolling_shutter_ms > 0;
+  const int block_frames = std::max(1, 1000000 / o.height);
+  std::vector<SE3> row_poses;
+  int block_start = 0;
   for (int f = 0; f < o.frames; ++f) {
-    const cv::Mat frame = renderer.Render(poses[f]);
+    if (rolling && (f == 0 || f >= block_start + block_frames)) {
+      block_start = f;
+      const int block_end = std::min(o.frames, f + block_frames);
+      std::vector<double> times;
+      times.reserve(static_cast<std::size_t>(block_end - f) * o.height);
+      for (int g = f; g < block_end; ++g) {
+        for (int row = 0; row < o.height; ++row) times.push_back(o.RowTime(g, row));
+      }
+      row_poses = MakeTrajectoryAt(o, [&o](double x, double y) { return TerrainHeight(x, y, o); }, times);
+    }
+    const cv::Mat frame =
+        rolling ? renderer.Render(std::vector<SE3>(
+                      row_poses.begin() + static_cast<std::ptrdiff_t>(f - block_start) * o.height,
+                      row_poses.begin() + static_cast<std::ptrdiff_t>(f - block_start + 1) * o.height))
+                : renderer.Render(poses[f]);
     video.Write(frame);
     if (o.write_frames) {
       cv::imwrite((dir / "frames" / fmt::format("{:06d}.png", f)).string(), frame);

@@ -50,6 +50,13 @@ double SynthOptions::PitchDegAt(double t) const {
   return pitch_deg + (tilt_from_deg - pitch_deg) * 0.5 * (1 + std::cos(std::numbers::pi * u));
 }
 
+double SynthOptions::RowTime(int frame, int row) const {
+  const double t = frame / fps;
+  if (rolling_shutter_ms <= 0 || height < 2) return t;
+  const double from_middle = static_cast<double>(row) / (height - 1) - 0.5;
+  return t + 1e-3 * rolling_shutter_ms * from_middle;
+}
+
 void SynthOptions::Check() const {
   CheckInRange("synth.altitude", altitude, 20.0, 1000.0);
   CheckInRange("synth.pitch_deg", pitch_deg, 0.0, 80.0);
@@ -80,6 +87,8 @@ void SynthOptions::Check() const {
   if (focal > 0) CheckInRange("synth.focal", focal, 0.1 * width, 20.0 * width);
   CheckInRange("synth.k1", k1, -0.5, 0.5);
   CheckInRange("synth.k2", k2, -0.5, 0.5);
+  // A sensor cannot take longer to read out one frame than the frame interval.
+  CheckInRange("synth.rolling_shutter_ms", rolling_shutter_ms, 0.0, 1000.0 / fps);
   CheckInRange("synth.relief", relief, 0.0, 200.0);
   CheckInRange("synth.cell_size", cell_size, 0.1, 2.0);
   CheckInRange("synth.building_density", building_density, 0.0, 3.0);
@@ -132,6 +141,7 @@ nlohmann::json SynthOptions::ToJson() const {
     j["tilt_from_deg"] = tilt_from_deg;
     j["tilt_seconds"] = tilt_seconds;
   }
+  if (rolling_shutter_ms > 0) j["rolling_shutter_ms"] = rolling_shutter_ms;
   return j;
 }
 

@@ -52,6 +52,11 @@ struct SynthOptions {
   double focal = 0.0;  // pixels; 0 = horizontal field of view of 60 degrees
   double k1 = 0.0;
   double k2 = 0.0;
+  // Rolling shutter, as most drone cameras record video: rows are exposed one after the other,
+  // the top row `rolling_shutter_ms` before the bottom row, while the drone moves and turns.
+  // The frame's time (and its ground-truth pose) is that of the middle row, so a global-shutter
+  // mapper's best single pose per frame is the ground truth. At most one frame interval.
+  double rolling_shutter_ms = 0.0;  // 0 = global shutter
 
   // --- world ---
   std::uint64_t seed = 1;
@@ -76,6 +81,9 @@ struct SynthOptions {
   double ClimbSeconds() const;
   // Camera tilt from nadir (deg) at time t: tilt_from_deg eased to pitch_deg over tilt_seconds.
   double PitchDegAt(double t) const;
+  // Exposure time of image row `row` (0 = top) of frame `frame` (s): frame / fps for the
+  // middle row, spread over rolling_shutter_ms from the top row to the bottom one.
+  double RowTime(int frame, int row) const;
 
   // Focal length actually used (resolves focal == 0).
   double EffectiveFocal() const;

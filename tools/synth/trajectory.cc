@@ -238,6 +238,13 @@ FlightProgress ProgressAt(const SynthOptions& o, double t) {
 }
 
 std::vector<SE3> MakeTrajectory(const SynthOptions& o, const TerrainFn& terrain) {
+  std::vector<double> times(static_cast<std::size_t>(o.frames));
+  for (int f = 0; f < o.frames; ++f) times[f] = f / o.fps;
+  return MakeTrajectoryAt(o, terrain, times);
+}
+
+std::vector<SE3> MakeTrajectoryAt(const SynthOptions& o, const TerrainFn& terrain,
+                                  const std::vector<double>& times) {
   Rng rng(o.seed * 7919 + 17);
   const double angle = rng.Range(0, 2 * kPi);
   const double duration = (o.frames - 1) / o.fps;
@@ -247,17 +254,18 @@ std::vector<SE3> MakeTrajectory(const SynthOptions& o, const TerrainFn& terrain)
                             rng.Range(0, 7), rng.Range(0, 7), rng.Range(0, 7)};
 
   // Plan positions (x, y), headings and the path sample grid (1 m) for altitude smoothing.
-  std::vector<Eigen::Vector2d> xy(o.frames);
-  std::vector<double> heading(o.frames);
+  const std::size_t n_times = times.size();
+  std::vector<Eigen::Vector2d> xy(n_times);
+  std::vector<double> heading(n_times);
   std::vector<Eigen::Vector2d> along_path;  // 1 m samples covering the flight
   if (o.trajectory == TrajectoryKind::kOrbit) {
     const double pitch = o.pitch_deg * kDeg;
     const double radius = std::max(o.altitude * std::tan(pitch), 0.3 * o.altitude);
-    for (int f = 0; f < o.frames; ++f) {
-      const FlightProgress p = ProgressAt(o, f / o.fps);
+    for (std::size_t i = 0; i < n_times; ++i) {
+      const FlightProgress p = ProgressAt(o, std::max(times[i], 0.0));
       const double phi = angle + p.metres / radius;
-      xy[f] = radius * Eigen::Vector2d(std::cos(phi), std::sin(phi));
-      heading[f] = phi + kPi + p.extra_yaw;  // look at the centre (turned by the stops)
+      xy[i] = radius * Eigen::Vector2d(std::cos(phi), std::sin(phi));
+      heading[i] = phi + kPi + p.extra_yaw;  // look at the centre (turned by the stops)
     }
     const int n = static_cast<int>(std::ceil(needed)) + 1;
     for (int k = 0; k <= n; ++k) {
@@ -268,10 +276,10 @@ std::vector<SE3> MakeTrajectory(const SynthOptions& o, const TerrainFn& terrain)
     const ArcLengthPath path = o.trajectory == TrajectoryKind::kLawnmower
                                    ? LawnmowerPath(o, needed, angle)
                                    : LoopPath(o, needed, angle, rng);
-    for (int f = 0; f < o.frames; ++f) {
-      const FlightProgress p = ProgressAt(o, f / o.fps);
-      xy[f] = path.At(p.metres);
-      heading[f] = path.Heading(p.metres) + p.extra_yaw;
+    for (std::size_t i = 0; i < n_times; ++i) {
+      const FlightProgress p = ProgressAt(o, std::max(times[i], 0.0));
+      xy[i] = path.At(p.metres);
+      heading[i] = path.Heading(p.metres) + p.extra_yaw;
     }
     const int n = static_cast<int>(std::ceil(needed)) + 1;
     for (int k = 0; k <= n; ++k) along_path.push_back(path.At(k));
@@ -280,17 +288,18 @@ std::vector<SE3> MakeTrajectory(const SynthOptions& o, const TerrainFn& terrain)
   const std::vector<double> ground = SmoothedGround(along_path, sigma, terrain);
 
   std::vector<SE3> poses;
-  poses.reserve(o.frames);
-  for (int f = 0; f < o.frames; ++f) {
-    const double t = f / o.fps;
-    const double s = std::min(ProgressAt(o, t).metres, static_cast<double>(ground.size() - 1));
+  poses.reserve(n_times);
+  for (std::size_t i = 0; i < n_times; ++i) {
+    const double t = times[i];
+    const FlightProgress p = ProgressAt(o, std::max(t, 0.0));
+    const double s = std::clamp(p.metres, 0.0, static_cast<double>(ground.size() - 1));
     const std::size_t k = std::min(static_cast<std::size_t>(s), ground.size() - 2);
     const double a = s - k;
-    const double z = (1 - a) * ground[k] + a * ground[k + 1] + ProgressAt(o, t).height;
-    const double psi = heading[f] + Wobble(t, wobble, phases[0], phases[1]);
+    const double z = (1 - a) * ground[k] + a * ground[k + 1] + p.height;
+    const double psi = heading[i] + Wobble(t, wobble, phases[0], phases[1]);
     const double pitch = o.PitchDegAt(t) * kDeg + Wobble(t, wobble, phases[2], phases[3]);
     const double roll = Wobble(t, wobble, phases[4], phases[5]);
-    poses.emplace_back(CameraRotation(psi, pitch, roll), Eigen::Vector3d(xy[f].x(), xy[f].y(), z));
+    poses.emplace_back(CameraRotation(psi, pitch, roll), Eigen::Vector3d(xy[i].x(), xy[i].y(), z));
   }
   return poses;
 }

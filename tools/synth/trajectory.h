@@ -38,4 +38,11 @@ FlightProgress ProgressAt(const SynthOptions& options, double t);
 // world_from_cam for frames 0 .. options.frames - 1 (time = index / fps).
 std::vector<SE3> MakeTrajectory(const SynthOptions& options, const TerrainFn& terrain);
 
+// world_from_cam at arbitrary times (s) of the same flight, e.g. the exposure time of each
+// image row under a rolling shutter (SynthOptions::RowTime). The path is the one
+// MakeTrajectory flies; times before 0 or after the last frame hold the path's end points
+// (attitude and height still follow the clock).
+std::vector<SE3> MakeTrajectoryAt(const SynthOptions& options, const TerrainFn& terrain,
+                                  const std::vector<double>& times);
+
 }  // namespace glam::synth
