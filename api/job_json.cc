@@ -120,6 +120,13 @@ JobOptions ParseJobOptions(const json& j) {
         throw InputError(fmt::format("options.global_refinement_keyframes must be in [0, {}] (0 = never), got {}",
                                      kMaxGlobalRefinementKeyframes, *o.global_refinement_keyframes));
       }
+    } else if (key == "rolling_shutter_ms") {
+      o.rolling_shutter_ms = GetNumber(value, "rolling_shutter_ms");
+      if (!(*o.rolling_shutter_ms >= 0 && *o.rolling_shutter_ms <= 100)) {
+        throw InputError(fmt::format(
+            "options.rolling_shutter_ms must be in [0, 100] milliseconds (0 = global shutter), got {}",
+            *o.rolling_shutter_ms));
+      }
     } else if (key == "smooth_window_s") {
       o.smooth_window_s = GetNumber(value, "smooth_window_s");
       if (!(*o.smooth_window_s >= 0 && *o.smooth_window_s <= 5)) {
@@ -130,7 +137,7 @@ JobOptions ParseJobOptions(const json& j) {
       throw InputError(fmt::format(
           "options: unknown key \"{}\" (known: name, stride, focal, intrinsics, "
           "keyframes_per_submap, max_image_size, detect_every, fixed_k1, smooth_window_s, name_order, "
-          "refine_focal, max_features, global_refinement_keyframes)",
+          "refine_focal, max_features, global_refinement_keyframes, rolling_shutter_ms)",
           key));
     }
   }
@@ -168,6 +175,7 @@ json ToJson(const JobOptions& o) {
   if (o.refine_focal) j["refine_focal"] = *o.refine_focal;
   if (o.max_features) j["max_features"] = *o.max_features;
   if (o.global_refinement_keyframes) j["global_refinement_keyframes"] = *o.global_refinement_keyframes;
+  if (o.rolling_shutter_ms) j["rolling_shutter_ms"] = *o.rolling_shutter_ms;
   return j;
 }
 
@@ -185,6 +193,7 @@ MappingOptions ToMappingOptions(const JobOptions& o) {
   if (o.smooth_window_s) m.submap.centre_smoothing.half_window_s = *o.smooth_window_s;
   if (o.name_order && *o.name_order) m.source.photos_by_capture_time = false;  // as --name-order
   if (o.global_refinement_keyframes) m.global_refinement.max_keyframes = *o.global_refinement_keyframes;
+  if (o.rolling_shutter_ms) m.rolling_shutter.readout_ms = *o.rolling_shutter_ms;
   m.Check();
   return m;
 }

@@ -45,6 +45,9 @@ struct JobOptions {
   // --global-refinement-keyframes`; default 400, 0 = never: rigid submaps). At most
   // kMaxGlobalRefinementKeyframes: the joint adjustment's memory and time grow with it.
   std::optional<int> global_refinement_keyframes;
+  // The camera's rolling-shutter readout time in milliseconds, first to last image row (`glam
+  // map --rolling-shutter-ms`; default 0: a global shutter). 0-100.
+  std::optional<double> rolling_shutter_ms;
 };
 
 // Upper bound of JobOptions::global_refinement_keyframes. Measured at 334 keyframes (2000
@@ -53,7 +56,7 @@ inline constexpr int kMaxGlobalRefinementKeyframes = 1000;
 
 // Accepts an object with the keys name, stride, focal, intrinsics, keyframes_per_submap,
 // max_image_size, detect_every, fixed_k1, smooth_window_s, name_order, refine_focal,
-// max_features, global_refinement_keyframes (all optional). Throws InputError naming the key
+// max_features, global_refinement_keyframes, rolling_shutter_ms (all optional). Throws InputError naming the key
 // for unknown keys, wrong types or out-of-range values (the resulting MappingOptions are
 // Check()ed as well).
 JobOptions ParseJobOptions(const nlohmann::json& j);

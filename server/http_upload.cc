@@ -189,7 +189,7 @@ api::JobOptions RawBodyOptions(const httplib::Request& req) {
     } else {
       try {
         std::size_t used = 0;
-        if (key == "focal" || key == "smooth_window_s") {
+        if (key == "focal" || key == "smooth_window_s" || key == "rolling_shutter_ms") {
           j[key] = std::stod(value, &used);
         } else {
           j[key] = std::stoll(value, &used);

@@ -70,6 +70,10 @@ class DecoderWorker {
   std::int64_t frames() const { return frames_; }
   std::int64_t frames_detected() const { return frames_detected_; }
   std::int64_t frames_without_features() const { return frames_without_features_; }
+  // The rolling-shutter correction applied (0 without one): readout, mean and largest shift.
+  double rolling_shutter_ms() const { return rolling_shutter_ ? options_.rolling_shutter.readout_ms : 0.0; }
+  double rolling_shutter_mean_shift_px() const { return rolling_shutter_ ? rolling_shutter_->mean_shift_px() : 0.0; }
+  double rolling_shutter_max_shift_px() const { return rolling_shutter_ ? rolling_shutter_->max_shift_px() : 0.0; }
 
  private:
   // Both return when the input ends, the consumer closed the queue or the run must stop.

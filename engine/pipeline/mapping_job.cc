@@ -408,6 +408,9 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   report.frames_unposed = std::max<std::int64_t>(0, report.frames_decoded - report.frames_posed);
   report.frames_without_features = worker.frames_without_features();
   report.frames_detected = worker.frames_detected();
+  report.rolling_shutter_ms = worker.rolling_shutter_ms();
+  report.rolling_shutter_mean_shift_px = worker.rolling_shutter_mean_shift_px();
+  report.rolling_shutter_max_shift_px = worker.rolling_shutter_max_shift_px();
   report.keyframes = stats.keyframes;
   report.submaps = static_cast<std::int64_t>(snapshot->submaps.size());
   report.submaps_discarded = stats.submaps_discarded;

@@ -39,6 +39,11 @@ struct MappingReport {
   std::int64_t frames_without_features = 0;
   std::int64_t frames_detected = 0;  // frames that got SIFT (the others: KLT propagation)
   int detection_interval = 1;        // SIFT on every N-th frame (MappingOptions)
+  // Rolling-shutter correction (RollingShutterOptions): the readout used (0 = none) and how far
+  // keypoints were moved, on average and at most (pixels).
+  double rolling_shutter_ms = 0;
+  double rolling_shutter_mean_shift_px = 0;
+  double rolling_shutter_max_shift_px = 0;
   std::int64_t keyframes = 0;
   std::int64_t submaps = 0;
   std::int64_t submaps_discarded = 0;

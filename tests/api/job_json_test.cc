@@ -72,6 +72,11 @@ TEST(JobJson, ParsesOptionsAndMapsThemToEngineOptions) {
   EXPECT_EQ(ToMappingOptions(JobOptions{}).global_refinement.max_keyframes,
             GlobalRefinementOptions{}.max_keyframes);
   EXPECT_EQ(ToJson(rigid), json::parse(R"({"global_refinement_keyframes": 0})"));
+  // rolling_shutter_ms is the camera's readout time (0 = global shutter, the default).
+  const JobOptions rolling = ParseJobOptionsText(R"({"rolling_shutter_ms": 28.5})");
+  EXPECT_EQ(ToMappingOptions(rolling).rolling_shutter.readout_ms, 28.5);
+  EXPECT_FALSE(ToMappingOptions(JobOptions{}).rolling_shutter.enabled());
+  EXPECT_EQ(ToJson(rolling), json::parse(R"({"rolling_shutter_ms": 28.5})"));
   // Round trip through the stored JSON.
   const JobOptions back = ParseJobOptions(ToJson(o));
   EXPECT_EQ(ToJson(back), ToJson(o));
@@ -104,6 +109,9 @@ TEST(JobJson, RejectsBadOptionsWithTheKeyInTheMessage) {
             std::string::npos);
   EXPECT_NE(message(R"({"global_refinement_keyframes": 1001})").find("global_refinement_keyframes"),
             std::string::npos);
+  EXPECT_NE(message(R"({"rolling_shutter_ms": -1})").find("rolling_shutter_ms"), std::string::npos);
+  EXPECT_NE(message(R"({"rolling_shutter_ms": 101})").find("rolling_shutter_ms"), std::string::npos);
+  EXPECT_NE(message(R"({"rolling_shutter_ms": "30"})").find("rolling_shutter_ms"), std::string::npos);
   EXPECT_NE(message(R"({"smooth_window_s": -0.1})").find("smooth_window_s"), std::string::npos);
   EXPECT_NE(message(R"({"smooth_window_s": 6})").find("smooth_window_s"), std::string::npos);
   EXPECT_NE(message(R"({"smooth_window_s": "0.5"})").find("smooth_window_s"), std::string::npos);

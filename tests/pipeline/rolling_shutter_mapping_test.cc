@@ -53,6 +53,10 @@ TEST(RollingShutterMapping, TheReadoutGivenMapsAsWellAsAGlobalShutter) {
   EXPECT_LT(corrected.result.trajectory.ate_rmse, 0.12);
   ASSERT_TRUE(corrected.result.map.has_value());
   EXPECT_LT(corrected.result.map->median, 0.2);
+  // report.json says what was corrected: ~0.5-1 px on average (25 px/frame along the flight).
+  EXPECT_EQ(corrected.report.rolling_shutter_ms, kReadoutMs);
+  EXPECT_GT(corrected.report.rolling_shutter_mean_shift_px, 0.2);
+  EXPECT_LT(corrected.report.rolling_shutter_mean_shift_px, 2.0);
 
   const MappedClip uncalibrated = MapAndEvaluate(kReadoutMs, false, "uncalibrated");
   EXPECT_NEAR(uncalibrated.report.focal / truth_focal, 1.0, 0.02);
@@ -62,6 +66,7 @@ TEST(RollingShutterMapping, TheReadoutGivenMapsAsWellAsAGlobalShutter) {
   // (calibrated); uncalibrated the focal came out 13.7 % long. If this stops being much worse,
   // the clip no longer tests the case.
   const MappedClip control = MapAndEvaluate(0.0, true, "global_shutter_assumed");
+  EXPECT_EQ(control.report.rolling_shutter_ms, 0.0);
   EXPECT_GT(control.result.trajectory.ate_rmse, 4.0 * corrected.result.trajectory.ate_rmse);
   ASSERT_TRUE(control.result.map.has_value());
   EXPECT_GT(control.result.map->median, 4.0 * corrected.result.map->median);

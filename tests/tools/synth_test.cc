@@ -523,6 +523,10 @@ TEST(SynthOptions, CheckRejectsNonsense) {
   rejects([](SynthOptions& o) { o.rolling_shutter_ms = -1; });
   rejects([](SynthOptions& o) { o.rolling_shutter_ms = 40; });  // longer than a frame at 30 fps
   EXPECT_THROW(ParseTrajectoryKind("zigzag"), InputError);
+  SynthOptions rolling;
+  rolling.rolling_shutter_ms = 30;
+  EXPECT_TRUE(rolling.ToJson().contains("rolling_shutter_ms"));
+  EXPECT_FALSE(SynthOptions().ToJson().contains("rolling_shutter_ms"));  // older clips stay up to date
   EXPECT_EQ(ParseTrajectoryKind("orbit"), TrajectoryKind::kOrbit);
 }
 

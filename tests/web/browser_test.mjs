@@ -241,6 +241,8 @@ async function main() {
     await page.fill('#upload-form input[name=max_features]', String(MAX_FEATURES));
     // The default (400), so the job maps as it would without it.
     await page.fill('#upload-form input[name=global_refinement_keyframes]', '400');
+    // A global shutter said explicitly (the demo clip's), so the job maps as it would without.
+    await page.fill('#upload-form input[name=rolling_shutter_ms]', '0');
     const t0 = Date.now();
     await page.click('#upload-form button[type=submit]');
     await page.waitForURL(/[?&]job=[0-9a-f]{16}/, { timeout: 60_000 });
@@ -398,6 +400,8 @@ async function main() {
       `the form's feature budget reached the job, the unticked boxes did not: options ${JSON.stringify(job.options)}`);
     check(job.options && job.options.global_refinement_keyframes === 400,
       `the form's refinement limit reached the job: options.global_refinement_keyframes ${job.options && job.options.global_refinement_keyframes}`);
+    check(job.options && job.options.rolling_shutter_ms === 0,
+      `the form's rolling-shutter readout reached the job: options.rolling_shutter_ms ${job.options && job.options.rolling_shutter_ms}`);
     // Disconnected parts (usually none on this clip) are linked with the job JSON's URLs.
     const shownParts = await page.$$eval(`#jobs tr[data-id="${jobId}"] .part a`, (els) => els.map((e) => new URL(e.href).pathname));
     const expectedParts = (job.parts || []).flatMap((p) => [p.urls.trajectory, p.urls.points]);

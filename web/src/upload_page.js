@@ -44,6 +44,12 @@ async function collectOptions(form) {
     if (!(f > 0)) throw new Error('the focal length must be a positive number of pixels');
     options.focal = f;
   }
+  const readout = form.elements.rolling_shutter_ms.value.trim();
+  if (readout) {
+    const ms = Number(readout);
+    if (!(ms >= 0 && ms <= 100)) throw new Error('the rolling-shutter readout must be between 0 and 100 ms');
+    options.rolling_shutter_ms = ms;
+  }
   if (intrinsicsFile) options.intrinsics = await readIntrinsics(intrinsicsFile);
   for (const [key, min, max] of [['stride', 1], ['keyframes_per_submap', 3], ['max_image_size', 0], ['detect_every', 0],
     ['max_features', 100, 50000], ['global_refinement_keyframes', 0, 1000]]) {
