@@ -36,6 +36,7 @@ struct MapArgs {
   std::string gps_path;
   bool no_gps = false;
   bool max_features_given = false;  // --max-features on the command line
+  std::string rolling_shutter = "0";  // --rolling-shutter-ms: milliseconds or "auto"
   bool paper = false;
   MappingOptions options;
 };
@@ -207,10 +208,12 @@ void RegisterMapCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--klt-levels", args->options.klt.pyramid_levels, "KLT pyramid levels above the image")
       ->capture_default_str();
-  cmd->add_option("--rolling-shutter-ms", args->options.rolling_shutter.readout_ms,
+  cmd->add_option("--rolling-shutter-ms", args->rolling_shutter,
                   "The camera's rolling-shutter readout time (ms, first to last image row): "
-                  "keypoints are corrected for the motion during readout; 0 = global shutter")
-      ->capture_default_str();
+                  "keypoints are corrected for the motion during the readout; auto = estimated on "
+                  "the first submap; 0 = global shutter")
+      ->capture_default_str()
+      ->each([args](const std::string& text) { args->options.rolling_shutter = RollingShutterFromText(text); });
   cmd->add_option("--max-features", args->options.sift.max_features,
                   fmt::format("SIFT features per frame (image folders: {})", kPhotoFolderMaxFeatures))
       ->capture_default_str()

@@ -24,6 +24,11 @@ struct Features {
   // detection frame by optical flow (KltPropagator: positions new, descriptors and colours
   // inherited, no features of newly visible ground). Keyframes prefer detected frames.
   bool detected = true;
+  // Rolling shutter (engine/pipeline/rolling_shutter.h), when the readout is being estimated:
+  // per keypoint, how far it moves per second of readout time, (y / (H - 1) - 0.5) times its
+  // image velocity (pixels per second); the keypoint at readout T is keypoints[i].pt - T *
+  // rolling_shutter_rates[i]. Empty otherwise.
+  std::vector<cv::Point2f> rolling_shutter_rates;
 
   size_t size() const { return keypoints.size(); }
   bool empty() const { return keypoints.empty(); }

@@ -65,9 +65,11 @@ void DecoderWorker::Run() {
     }
     if (rolling_shutter_ && !ShouldStop()) {
       if (std::optional<FrameFeatures> last = rolling_shutter_->Flush()) Forward(std::move(*last));
-      GLAM_LOG_INFO("rolling shutter ({} ms readout): keypoints moved {:.2f} px on average, {:.1f} px at most",
-                    options_.rolling_shutter.readout_ms, rolling_shutter_->mean_shift_px(),
-                    rolling_shutter_->max_shift_px());
+      if (!options_.rolling_shutter.estimate) {
+        GLAM_LOG_INFO("rolling shutter ({} ms readout): keypoints moved {:.2f} px on average, {:.1f} px at most",
+                      options_.rolling_shutter.readout_ms, rolling_shutter_->mean_shift_px(),
+                      rolling_shutter_->max_shift_px());
+      }
     }
   } catch (...) {
     error_ = std::current_exception();

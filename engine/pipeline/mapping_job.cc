@@ -147,6 +147,7 @@ ResumeCheckpoint MakeCheckpoint(const SubmapBuilder& builder, const std::vector<
   c.focal_held = builder.stats().focal_held;
   c.k1 = builder.k1();
   c.k1_held = builder.stats().k1_held;
+  c.readout_ms = builder.stats().readout_ms;
   c.input = report.input;
   c.processing_width = report.processing_width;
   c.processing_height = report.processing_height;
@@ -234,8 +235,10 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
                 info.processing_size.width, info.processing_size.height, report.fps,
                 report.frames_total, intrinsics.fx);
 
-  SubmapBuilder builder(intrinsics, options.submap, cancel);
-  if (resume) builder.ResumeAt(resume->next_submap_id, resume->focal_held, resume->k1_held);
+  SubmapOptions submap_options = options.submap;
+  submap_options.estimate_readout = options.rolling_shutter.estimate;
+  SubmapBuilder builder(intrinsics, submap_options, cancel);
+  if (resume) builder.ResumeAt(resume->next_submap_id, resume->focal_held, resume->k1_held, resume->readout_ms);
   SubmapAligner aligner(vocabulary, options.alignment, submaps_root, cancel);
   // Each published revision aligned at most one submap, so the interrupted run never got past
   // revision next_submap_id: continuing after it keeps revisions growing for the job's readers.
@@ -408,7 +411,10 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   report.frames_unposed = std::max<std::int64_t>(0, report.frames_decoded - report.frames_posed);
   report.frames_without_features = worker.frames_without_features();
   report.frames_detected = worker.frames_detected();
-  report.rolling_shutter_ms = worker.rolling_shutter_ms();
+  report.rolling_shutter_ms = stats.readout_ms.value_or(worker.rolling_shutter_ms());
+  report.rolling_shutter_estimated = stats.readout_ms.has_value();
+  report.rolling_shutter_profile = stats.readout_profile;
+  report.rolling_shutter_decided_at_submap = stats.readout_decided_at_submap;
   report.rolling_shutter_mean_shift_px = worker.rolling_shutter_mean_shift_px();
   report.rolling_shutter_max_shift_px = worker.rolling_shutter_max_shift_px();
   report.keyframes = stats.keyframes;

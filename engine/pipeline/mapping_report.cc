@@ -164,6 +164,15 @@ std::vector<std::string> Diagnose(const MappingReport& r, int min_features) {
         "accurate as the GPS",
         part.first_frame, part.last_frame, part.fit.rms_m));
   }
+  if (r.rolling_shutter_estimated && r.rolling_shutter_ms > 0 && r.rolling_shutter_decided_at_submap > 0) {
+    warnings.push_back(fmt::format(
+        "the rolling-shutter readout ({:.1f} ms) could only be estimated on submap {}, so the {} "
+        "submap{} before it {} mapped uncorrected; for the best map, run again with the readout "
+        "given (glam map --rolling-shutter-ms {:.0f}, or the job option rolling_shutter_ms)",
+        r.rolling_shutter_ms, r.rolling_shutter_decided_at_submap, r.rolling_shutter_decided_at_submap,
+        r.rolling_shutter_decided_at_submap == 1 ? "" : "s", r.rolling_shutter_decided_at_submap == 1 ? "was" : "were",
+        r.rolling_shutter_ms));
+  }
   const double focal_change =
       r.free_focal_original && r.focal_original > 0 ? *r.free_focal_original / r.focal_original - 1.0 : 0.0;
   if (std::abs(focal_change) > kFixedFocalWarningFraction &&
@@ -192,6 +201,17 @@ std::vector<std::string> Diagnose(const MappingReport& r, int min_features) {
   return warnings;
 }
 
+namespace {
+
+// [{"readout_ms": ..., "rms_px": ...}, ...]
+nlohmann::json RollingShutterProfileJson(const std::vector<std::pair<double, double>>& profile) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const auto& [ms, rms] : profile) out.push_back({{"readout_ms", ms}, {"rms_px", rms}});
+  return out;
+}
+
+}  // namespace
+
 nlohmann::json MappingReport::ToJson() const {
   return {{"input", input},
           {"frames_total", frames_total},
@@ -203,6 +223,8 @@ nlohmann::json MappingReport::ToJson() const {
           {"detection_interval", detection_interval},
           {"rolling_shutter",
            {{"readout_ms", rolling_shutter_ms},
+            {"estimated", rolling_shutter_estimated},
+            {"profile", RollingShutterProfileJson(rolling_shutter_profile)},
             {"mean_shift_px", rolling_shutter_mean_shift_px},
             {"max_shift_px", rolling_shutter_max_shift_px}}},
           {"keyframes", keyframes},

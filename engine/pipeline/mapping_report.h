@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -42,6 +43,9 @@ struct MappingReport {
   // Rolling-shutter correction (RollingShutterOptions): the readout used (0 = none) and how far
   // keypoints were moved, on average and at most (pixels).
   double rolling_shutter_ms = 0;
+  bool rolling_shutter_estimated = false;  // readout estimated (auto): the profile's (ms, rms px)
+  std::vector<std::pair<double, double>> rolling_shutter_profile;
+  std::int64_t rolling_shutter_decided_at_submap = 0;  // estimated: the submap that decided it
   double rolling_shutter_mean_shift_px = 0;
   double rolling_shutter_max_shift_px = 0;
   std::int64_t keyframes = 0;

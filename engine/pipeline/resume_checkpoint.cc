@@ -12,7 +12,7 @@
 namespace glam {
 
 void WriteCheckpoint(const std::filesystem::path& out_dir, const ResumeCheckpoint& c) {
-  const nlohmann::json json = {{"next_submap_id", c.next_submap_id},
+  nlohmann::json json = {{"next_submap_id", c.next_submap_id},
                                {"resume_frame", c.resume_frame},
                                {"focal_px", c.focal},
                                {"focal_held", c.focal_held},
@@ -22,6 +22,7 @@ void WriteCheckpoint(const std::filesystem::path& out_dir, const ResumeCheckpoin
                                {"processing_size", {c.processing_width, c.processing_height}},
                                {"run_id", c.run_id},
                                {"photos_reordered_by_time", c.photos_reordered_by_time}};
+  if (c.readout_ms) json["rolling_shutter_readout_ms"] = *c.readout_ms;
   WriteFileAtomically(out_dir / kCheckpointFile, json.dump(2) + "\n");
 }
 
@@ -43,6 +44,7 @@ std::optional<ResumeCheckpoint> ReadCheckpoint(const std::filesystem::path& out_
     c.processing_height = json.at("processing_size").at(1).get<int>();
     c.run_id = json.value("run_id", std::string());
     c.photos_reordered_by_time = json.value("photos_reordered_by_time", std::int64_t{0});
+    if (json.contains("rolling_shutter_readout_ms")) c.readout_ms = json.at("rolling_shutter_readout_ms").get<double>();
     if (c.resume_frame < 0 || !(c.focal > 0)) throw InputError("values out of range");
     return c;
   } catch (const std::exception& e) {

@@ -24,6 +24,9 @@ struct ResumeCheckpoint {
   // was held at the initial value (SubmapOptions::k1_profile_min_rms_increase): kept so.
   double k1 = 0;
   bool k1_held = false;
+  // Rolling-shutter readout the run estimated (ms; SubmapOptions::estimate_readout), unset when
+  // not estimated: the resumed run corrects its keypoints with it instead of deciding again.
+  std::optional<double> readout_ms;
   // What the checkpoint belongs to: a different input or processing size cannot resume.
   std::string input;
   int processing_width = 0;

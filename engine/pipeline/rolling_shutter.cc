@@ -6,6 +6,9 @@
 
 #include <Eigen/Dense>
 
+#include <fmt/format.h>
+
+#include "engine/core/error.h"
 #include "engine/core/options.h"
 
 namespace glam {
@@ -14,6 +17,28 @@ void RollingShutterOptions::Check() const {
   CheckInRange("RollingShutterOptions.readout_ms", readout_ms, 0.0, 100.0);
   CheckGreater("RollingShutterOptions.max_frame_gap_s", max_frame_gap_s, 0.0);
   CheckInRange("RollingShutterOptions.min_model_points", min_model_points, 6, 100000);
+  if (estimate && readout_ms > 0) {
+    throw InputError("RollingShutterOptions: give a readout time or ask for its estimate, not both");
+  }
+}
+
+RollingShutterOptions RollingShutterFromText(const std::string& text) {
+  RollingShutterOptions options;
+  if (text == "auto") {
+    options.estimate = true;
+    return options;
+  }
+  std::size_t used = 0;
+  try {
+    options.readout_ms = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size()) {
+    throw InputError(fmt::format("rolling-shutter readout must be a number of milliseconds or \"auto\", got \"{}\"", text));
+  }
+  options.Check();
+  return options;
 }
 
 std::array<double, 6> FlowModel::Basis(cv::Point2f p) const {
@@ -165,6 +190,7 @@ void RollingShutterCorrector::Correct(FrameFeatures& frame, const Track* next) {
 
   const double readout_s = 1e-3 * options_.readout_ms;
   const double rows = std::max(1, image_size_.height - 1);
+  if (options_.estimate) frame.features.rolling_shutter_rates.assign(keypoints.size(), cv::Point2f(0, 0));
   for (std::size_t i = 0; i < keypoints.size(); ++i) {
     cv::Point2f v;
     if (measured[i]) {
@@ -180,8 +206,12 @@ void RollingShutterCorrector::Correct(FrameFeatures& frame, const Track* next) {
     } else {
       continue;
     }
-    const double dt = readout_s * (keypoints[i].pt.y / rows - 0.5);
-    const cv::Point2f shift = v * static_cast<float>(-dt);
+    const double row_time = keypoints[i].pt.y / rows - 0.5;  // in readouts from the middle row
+    if (options_.estimate) {
+      frame.features.rolling_shutter_rates[i] = v * static_cast<float>(row_time);
+      continue;
+    }
+    const cv::Point2f shift = v * static_cast<float>(-readout_s * row_time);
     keypoints[i].pt += shift;
     const double length = std::hypot(shift.x, shift.y);
     shift_sum_ += length;

@@ -34,6 +34,7 @@
 
 #include <array>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -46,14 +47,21 @@ struct RollingShutterOptions {
   // Readout time from the first (top) image row to the last (ms); 0 = global shutter, no
   // correction. At most 100 ms (longer than a frame interval at 10 fps).
   double readout_ms = 0.0;
+  // Estimate the readout instead (`--rolling-shutter-ms auto`): keypoints are handed on
+  // uncorrected with their Features::rolling_shutter_rates, and the submap builder picks the
+  // readout whose correction best fits the first submap (SubmapOptions::estimate_readout).
+  bool estimate = false;
   // Velocities measured over a longer time than this (s) are not used (gaps, strided input).
   double max_frame_gap_s = 0.25;
   // A frame's flow model needs at least this many measured velocities.
   int min_model_points = 12;
 
-  bool enabled() const { return readout_ms > 0; }
+  bool enabled() const { return readout_ms > 0 || estimate; }
   void Check() const;  // throws InputError
 };
+
+// "auto" (estimate) or a readout in milliseconds ("0" = global shutter); InputError otherwise.
+RollingShutterOptions RollingShutterFromText(const std::string& text);
 
 // Image velocity field of one frame: v(x, y) = quadratic in normalised image coordinates,
 // per component (pixels per second).

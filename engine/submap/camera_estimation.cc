@@ -5,7 +5,13 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <string>
+#include <unordered_map>
 #include <limits>
+
+#include <fmt/format.h>
 
 #include "engine/core/logging.h"
 #include "engine/submap/submap_builder.h"
@@ -27,6 +33,16 @@ double SubmapBuilder::CameraChangeSinceSubmapStart() const {
 }
 
 bool SubmapBuilder::RebuildIfCameraMoved(std::vector<Submap>* completed) {
+  // The readout comes first (the other decisions are then taken on corrected keypoints), once,
+  // calibrated or not, whatever the rebuild count.
+  // One profile per submap (a camera rebuild of the same submap is not profiled again).
+  if (readout_decision_open_ && readout_profiled_submap_ != static_cast<std::int64_t>(next_submap_id_) &&
+      CameraDecidingSubmap() && open_.start_focal > 0 && DecideReadout()) {
+    ++stats_.submap_rebuilds;
+    const RestartCarry carry{open_.rebuilds + 1, open_.bootstrap_preference, open_.bootstrap_twin_checked};
+    RestartWith(std::move(open_.frames), carry, completed);
+    return true;
+  }
   if (open_.rebuilds >= options_.max_submap_rebuilds || open_.start_focal <= 0) return false;
   // The decisions on the camera model are taken once, on the job's first submap: one taken
   // after a submap was emitted would make the map's submaps disagree on the camera (except
@@ -154,6 +170,102 @@ double SubmapBuilder::K1ProfileRmsIncrease() {
                 "the initial {:+.4f}",
                 next_submap_id_, open_.keyframes.size(), rms[0], k1s[0], 100.0 * increase, k1s[1]);
   return increase;
+}
+
+bool SubmapBuilder::DecideReadout() {
+  ++readout_profiles_;
+  readout_profiled_submap_ = next_submap_id_;
+  const double current_s = readout_s_;
+  std::vector<std::pair<double, double>>& profile = stats_.readout_profile;
+  profile.clear();
+  for (int i = 0; i * options_.readout_step_ms <= options_.readout_max_ms + 1e-9; ++i) {
+    const double ms = i * options_.readout_step_ms;
+    profile.emplace_back(ms, ReadoutRms(1e-3 * ms));
+  }
+  std::size_t best = 0;
+  for (std::size_t i = 1; i < profile.size(); ++i) {
+    if (profile[i].second < profile[best].second) best = i;
+  }
+  double best_ms = profile[best].first;
+  double best_rms = profile[best].second;
+  if (best > 0 && best + 1 < profile.size()) {
+    // Vertex of the parabola through the best and its neighbours (equal spacing), tried too.
+    const double a = profile[best - 1].second, b = profile[best].second, c = profile[best + 1].second;
+    const double denominator = a - 2 * b + c;
+    if (denominator > 0) {
+      const double vertex_ms = best_ms + 0.5 * options_.readout_step_ms * (a - c) / denominator;
+      const double vertex_rms = ReadoutRms(1e-3 * vertex_ms);
+      profile.emplace_back(vertex_ms, vertex_rms);
+      if (vertex_rms < best_rms) {
+        best_ms = vertex_ms;
+        best_rms = vertex_rms;
+      }
+    }
+  }
+  const double none_rms = profile.front().second;
+  const double gain = none_rms > 0 ? 1.0 - best_rms / none_rms : 0.0;
+  std::string tried;
+  for (const auto& [ms, rms] : profile) tried += fmt::format(" {:.1f} ms {:.4f} px;", ms, rms);
+  GLAM_LOG_INFO("rolling-shutter readout profile of submap {} ({} keyframes):{}", next_submap_id_,
+                open_.keyframes.size(), tried);
+  const bool decided = gain >= options_.readout_min_rms_gain;
+  if (!decided && readout_profiles_ < options_.readout_max_submaps) {
+    // Flying straight at constant speed, a rolling shutter squashes every frame alike, which
+    // the submap absorbs as a world squashed along the track (a flat profile); turns and speed
+    // changes tell the readout apart. The next submap is profiled again.
+    GLAM_LOG_INFO("rolling shutter: the readout profile of submap {} is flat (best {:.1f} ms, {:+.2f} %); "
+                  "profiling the next submap",
+                  next_submap_id_, best_ms, 100.0 * gain);
+    return false;
+  }
+  readout_decision_open_ = false;
+  const double chosen_s = decided ? 1e-3 * best_ms : 0.0;
+  stats_.readout_ms = 1e3 * chosen_s;
+  stats_.readout_decided_at_submap = next_submap_id_;
+  if (chosen_s > 0) {
+    GLAM_LOG_INFO("rolling shutter: a readout of {:.1f} ms fits submap {} {:.1f} % better than a global "
+                  "shutter; tracking its {} frames again with the keypoints corrected",
+                  1e3 * chosen_s, next_submap_id_, 100.0 * gain, open_.frames.size());
+  } else {
+    GLAM_LOG_INFO("rolling shutter: no readout fits submap {} {:.1f} % better than a global shutter "
+                  "(best {:.1f} ms, {:+.2f} %): keypoints left uncorrected",
+                  next_submap_id_, 100.0 * options_.readout_min_rms_gain, best_ms, 100.0 * gain);
+  }
+  if (std::abs(chosen_s - current_s) < 1e-6) return false;
+  readout_s_ = chosen_s;
+  return true;
+}
+
+double SubmapBuilder::ReadoutRms(double readout_s) {
+  // Observations are copies of their keyframe's keypoints, found by position (exact: both
+  // are the same floats).
+  const auto key = [](const Eigen::Vector2f& p) {
+    std::uint32_t x, y;
+    std::memcpy(&x, &p.x(), sizeof x);
+    std::memcpy(&y, &p.y(), sizeof y);
+    return (static_cast<std::uint64_t>(x) << 32) | y;
+  };
+  std::vector<std::unordered_map<std::uint64_t, Eigen::Vector2f>> rates(open_.keyframes.size());
+  for (std::size_t k = 0; k < open_.keyframes.size(); ++k) {
+    const CompactFeatures& features = open_.frames[open_.keyframe_frame_positions[k]].features;
+    if (features.rolling_shutter_rates.size() != features.size()) continue;
+    for (std::size_t i = 0; i < features.size(); ++i) rates[k][key(features.points[i])] = features.rolling_shutter_rates[i];
+  }
+  std::vector<Keyframe> keyframes = open_.keyframes;
+  std::vector<Landmark> landmarks = open_.landmarks;
+  const auto step = static_cast<float>(readout_s - readout_s_);
+  for (Landmark& landmark : landmarks) {
+    for (Observation& observation : landmark.observations) {
+      const auto& of_keyframe = rates[observation.keyframe];
+      const auto it = of_keyframe.find(key(observation.pixel));
+      if (it != of_keyframe.end()) observation.pixel -= step * it->second;
+    }
+  }
+  BundleAdjustmentOptions ba = options_.bundle_adjustment;
+  ba.max_iterations = kCameraTestIterations;
+  const BundleAdjustmentSummary summary = BundleAdjust(CurrentCamera().intrinsics(), keyframes, landmarks, ba, cancel_);
+  stats_.bundle_adjust_seconds += summary.seconds;
+  return summary.final_rms_pixels;
 }
 
 }  // namespace glam

@@ -44,8 +44,18 @@ CompactFeatures CompactFeatures::From(const Features& features) {
     c.descriptors.push_back(QuantizeDescriptor(features.descriptors.ptr<float>(static_cast<int>(i))));
   }
   c.colors = features.colors;
+  c.rolling_shutter_rates.reserve(features.rolling_shutter_rates.size());
+  for (const cv::Point2f& r : features.rolling_shutter_rates) c.rolling_shutter_rates.emplace_back(r.x, r.y);
   return c;
 }
+
+void CompactFeatures::ApplyReadout(double readout_s) {
+  if (rolling_shutter_rates.size() != points.size() || readout_s == readout_applied_s) return;
+  const auto step = static_cast<float>(readout_s - readout_applied_s);
+  for (std::size_t i = 0; i < points.size(); ++i) points[i] -= step * rolling_shutter_rates[i];
+  readout_applied_s = readout_s;
+}
+
 
 cv::Mat CompactFeatures::FloatDescriptors() const {
   cv::Mat out(static_cast<int>(descriptors.size()), kDescriptorSize, CV_32F);

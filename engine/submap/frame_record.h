@@ -22,8 +22,14 @@ struct CompactFeatures {
   std::vector<Eigen::Vector2f> points;
   std::vector<Descriptor> descriptors;
   std::vector<Rgb> colors;
+  // Features::rolling_shutter_rates (empty unless the readout is estimated) and the readout
+  // (s) `points` are corrected for: points = raw - readout_applied_s * rates.
+  std::vector<Eigen::Vector2f> rolling_shutter_rates;
+  double readout_applied_s = 0;
 
   static CompactFeatures From(const Features& features);
+  // Moves the points to their positions under `readout_s` (no-op without rates).
+  void ApplyReadout(double readout_s);
   std::size_t size() const { return points.size(); }
   // N x 128 CV_32F, the inverse of the quantisation in From() (to within 1/512).
   cv::Mat FloatDescriptors() const;

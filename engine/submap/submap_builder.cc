@@ -23,6 +23,7 @@ SubmapBuilder::SubmapBuilder(const Intrinsics& intrinsics, const SubmapOptions& 
       k1_(intrinsics.k1) {
   intrinsics_.Check();
   options_.Check();
+  readout_decision_open_ = options_.estimate_readout;
 }
 
 Camera SubmapBuilder::CurrentCamera() const {
@@ -33,10 +34,18 @@ Camera SubmapBuilder::CurrentCamera() const {
   return Camera(in);
 }
 
-void SubmapBuilder::ResumeAt(std::uint32_t next_submap_id, bool focal_held, bool k1_held) {
+void SubmapBuilder::ResumeAt(std::uint32_t next_submap_id, bool focal_held, bool k1_held,
+                             std::optional<double> readout_ms) {
   GLAM_CHECK(stats_.frames_seen == 0, "ResumeAt after frames were added");
   next_submap_id_ = next_submap_id;
-  if (next_submap_id > 0) camera_decisions_open_ = false;  // taken by the interrupted run
+  if (next_submap_id > 0) {
+    camera_decisions_open_ = false;  // taken by the interrupted run
+    if (readout_decision_open_) {
+      readout_decision_open_ = false;
+      readout_s_ = 1e-3 * readout_ms.value_or(0.0);
+      stats_.readout_ms = readout_ms.value_or(0.0);
+    }
+  }
   if (focal_held && options_.bundle_adjustment.refine_focal) HoldInitialFocal();
   if (k1_held && options_.bundle_adjustment.refine_k1) HoldInitialK1();
 }
@@ -82,6 +91,8 @@ void SubmapBuilder::StartSubmapAt(std::deque<FrameRecord> frames) {
 }
 
 void SubmapBuilder::Process(FrameRecord record, std::vector<Submap>* completed) {
+  // Replayed frames too: a rebuild after the readout decision corrects them anew.
+  record.features.ApplyReadout(readout_s_);
   if (!open_.bootstrapped) {
     // The second keyframe is looked for among detected frames only (propagated frames carry a
     // subset of a detection frame's keypoints); the frames in between are localised once the

@@ -62,6 +62,12 @@ struct SubmapBuilderStats {
   // not checked), and whether k1 was therefore held at the initial value.
   std::optional<double> k1_profile_rms_increase;
   bool k1_held = false;
+  // SubmapOptions::estimate_readout: the rolling-shutter readout decided on the first submap
+  // (ms; unset when not estimated) and the profile's rms at each readout tried (ms, px).
+  std::optional<double> readout_ms;
+  std::vector<std::pair<double, double>> readout_profile;
+  // The submap whose profile decided (the submaps before it were mapped uncorrected).
+  std::int64_t readout_decided_at_submap = 0;
 };
 
 class SubmapBuilder {
@@ -90,7 +96,9 @@ class SubmapBuilder {
   // focal at its initial value (SubmapOptions::focal_profile_step), so this one keeps the
   // focal it was constructed with fixed as well; `k1_held` likewise for k1. Only before the
   // first AddFrame.
-  void ResumeAt(std::uint32_t next_submap_id, bool focal_held = false, bool k1_held = false);
+  // `readout_ms`: the rolling-shutter readout the interrupted run decided on (estimate_readout).
+  void ResumeAt(std::uint32_t next_submap_id, bool focal_held = false, bool k1_held = false,
+                std::optional<double> readout_ms = std::nullopt);
   // Id the next completed submap will get; also the number of submaps emitted so far.
   std::uint32_t next_submap_id() const { return next_submap_id_; }
   // Frame index of the first frame of the open submap (resume point), if any.
@@ -207,6 +215,13 @@ class SubmapBuilder {
   double K1ProfileRmsIncrease();
   // k1 goes back to the initial one and stays fixed (stats().k1_held); the caller re-tracks.
   void HoldInitialK1();
+  // SubmapOptions::estimate_readout, at the completion of the first submaps until decided (at
+  // most readout_max_submaps): the readout profile. Returns whether the readout changed (the caller then re-tracks the open submap, whose
+  // frames Process() corrects for the new readout).
+  bool DecideReadout();
+  // Reprojection rms of the open submap bundle adjusted on a copy whose observations are
+  // corrected for `readout_s` instead of the current readout.
+  double ReadoutRms(double readout_s);
   // On the job's first submap, once, while k1 is refined: the k1 profile, and HoldInitialK1()
   // when it says the images do not ask for the estimate. Returns whether it held k1, nullopt
   // when it did not decide (already decided, decisions closed, k1 not refined).
@@ -285,6 +300,12 @@ class SubmapBuilder {
   CancellationToken cancel_;
   double focal_;
   double k1_;
+  // Rolling-shutter readout (s) the frames are corrected for (CompactFeatures::ApplyReadout);
+  // decided by DecideReadout() while readout_decision_open_.
+  double readout_s_ = 0;
+  bool readout_decision_open_ = false;
+  int readout_profiles_ = 0;  // readout profiles run (one per submap while undecided)
+  std::int64_t readout_profiled_submap_ = -1;
   std::vector<double> completed_keyframe_focals_;  // for the running median
   OpenSubmap open_;
   // Frames of the last completed submap from its middle keyframe to the overlap start, kept

@@ -51,6 +51,10 @@ void SubmapOptions::Check() const {
   CheckInRange("SubmapOptions.focal_profile_step", focal_profile_step, 0.0, 0.5);
   CheckInRange("SubmapOptions.focal_profile_min_rms_increase", focal_profile_min_rms_increase, 0.0, 0.1);
   CheckInRange("SubmapOptions.k1_profile_min_rms_increase", k1_profile_min_rms_increase, 0.0, 0.5);
+  CheckInRange("SubmapOptions.readout_max_ms", readout_max_ms, 1.0, 100.0);
+  CheckInRange("SubmapOptions.readout_step_ms", readout_step_ms, 0.5, readout_max_ms);
+  CheckInRange("SubmapOptions.readout_min_rms_gain", readout_min_rms_gain, 0.0, 0.5);
+  CheckInRange("SubmapOptions.readout_max_submaps", readout_max_submaps, 1, 1000);
   CheckInRange("SubmapOptions.short_final_submap_fraction", short_final_submap_fraction, 0.0, 1.0);
   if (max_keyframe_parallax_deg > 0 && max_keyframe_parallax_deg < 2.0 * min_triangulation_angle_deg) {
     throw InputError("SubmapOptions.max_keyframe_parallax_deg must be 0 or at least twice "
