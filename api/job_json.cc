@@ -120,8 +120,16 @@ JobOptions ParseJobOptions(const json& j) {
         throw InputError(fmt::format("options.global_refinement_keyframes must be in [0, {}] (0 = never), got {}",
                                      kMaxGlobalRefinementKeyframes, *o.global_refinement_keyframes));
       }
+    } else if (key == "rolling_shutter_ms" && value.is_string()) {
+      if (value.get<std::string>() != "auto") {
+        throw InputError(fmt::format(
+            "options.rolling_shutter_ms must be a number of milliseconds or \"auto\", got {}", value.dump()));
+      }
+      o.rolling_shutter_auto = true;
+      o.rolling_shutter_ms.reset();
     } else if (key == "rolling_shutter_ms") {
       o.rolling_shutter_ms = GetNumber(value, "rolling_shutter_ms");
+      o.rolling_shutter_auto = false;
       if (!(*o.rolling_shutter_ms >= 0 && *o.rolling_shutter_ms <= 100)) {
         throw InputError(fmt::format(
             "options.rolling_shutter_ms must be in [0, 100] milliseconds (0 = global shutter), got {}",
@@ -175,7 +183,11 @@ json ToJson(const JobOptions& o) {
   if (o.refine_focal) j["refine_focal"] = *o.refine_focal;
   if (o.max_features) j["max_features"] = *o.max_features;
   if (o.global_refinement_keyframes) j["global_refinement_keyframes"] = *o.global_refinement_keyframes;
-  if (o.rolling_shutter_ms) j["rolling_shutter_ms"] = *o.rolling_shutter_ms;
+  if (o.rolling_shutter_auto) {
+    j["rolling_shutter_ms"] = "auto";
+  } else if (o.rolling_shutter_ms) {
+    j["rolling_shutter_ms"] = *o.rolling_shutter_ms;
+  }
   return j;
 }
 
@@ -194,6 +206,7 @@ MappingOptions ToMappingOptions(const JobOptions& o) {
   if (o.name_order && *o.name_order) m.source.photos_by_capture_time = false;  // as --name-order
   if (o.global_refinement_keyframes) m.global_refinement.max_keyframes = *o.global_refinement_keyframes;
   if (o.rolling_shutter_ms) m.rolling_shutter.readout_ms = *o.rolling_shutter_ms;
+  if (o.rolling_shutter_auto) m.rolling_shutter.estimate = true;  // as --rolling-shutter-ms auto
   m.Check();
   return m;
 }

@@ -46,8 +46,10 @@ struct JobOptions {
   // kMaxGlobalRefinementKeyframes: the joint adjustment's memory and time grow with it.
   std::optional<int> global_refinement_keyframes;
   // The camera's rolling-shutter readout time in milliseconds, first to last image row (`glam
-  // map --rolling-shutter-ms`; default 0: a global shutter). 0-100.
+  // map --rolling-shutter-ms`; default 0: a global shutter). 0-100, or estimated
+  // (rolling_shutter_auto; the JSON value "auto").
   std::optional<double> rolling_shutter_ms;
+  bool rolling_shutter_auto = false;
 };
 
 // Upper bound of JobOptions::global_refinement_keyframes. Measured at 334 keyframes (2000

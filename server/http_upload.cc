@@ -178,6 +178,8 @@ api::JobOptions RawBodyOptions(const httplib::Request& req) {
     if (key == "token" || key == "filename") continue;
     if (key == "name") {
       j[key] = value;
+    } else if (key == "rolling_shutter_ms" && value == "auto") {
+      j[key] = value;
     } else if (key == "fixed_k1" || key == "refine_focal") {
       if (value == "true" || value == "1") {
         j[key] = true;

@@ -77,6 +77,9 @@ TEST(JobJson, ParsesOptionsAndMapsThemToEngineOptions) {
   EXPECT_EQ(ToMappingOptions(rolling).rolling_shutter.readout_ms, 28.5);
   EXPECT_FALSE(ToMappingOptions(JobOptions{}).rolling_shutter.enabled());
   EXPECT_EQ(ToJson(rolling), json::parse(R"({"rolling_shutter_ms": 28.5})"));
+  const JobOptions estimated = ParseJobOptionsText(R"({"rolling_shutter_ms": "auto"})");
+  EXPECT_TRUE(ToMappingOptions(estimated).rolling_shutter.estimate);
+  EXPECT_EQ(ToJson(estimated), json::parse(R"({"rolling_shutter_ms": "auto"})"));
   // Round trip through the stored JSON.
   const JobOptions back = ParseJobOptions(ToJson(o));
   EXPECT_EQ(ToJson(back), ToJson(o));
@@ -112,6 +115,7 @@ TEST(JobJson, RejectsBadOptionsWithTheKeyInTheMessage) {
   EXPECT_NE(message(R"({"rolling_shutter_ms": -1})").find("rolling_shutter_ms"), std::string::npos);
   EXPECT_NE(message(R"({"rolling_shutter_ms": 101})").find("rolling_shutter_ms"), std::string::npos);
   EXPECT_NE(message(R"({"rolling_shutter_ms": "30"})").find("rolling_shutter_ms"), std::string::npos);
+  EXPECT_NE(message(R"({"rolling_shutter_ms": "automatic"})").find("rolling_shutter_ms"), std::string::npos);
   EXPECT_NE(message(R"({"smooth_window_s": -0.1})").find("smooth_window_s"), std::string::npos);
   EXPECT_NE(message(R"({"smooth_window_s": 6})").find("smooth_window_s"), std::string::npos);
   EXPECT_NE(message(R"({"smooth_window_s": "0.5"})").find("smooth_window_s"), std::string::npos);

@@ -23,6 +23,8 @@ namespace {
 namespace fs = std::filesystem;
 
 const fs::path kClip = fs::path(GLAM_TEST_FIXTURES_DIR) / "rolling_shutter";
+// The same kind of flight with a global shutter.
+const fs::path kGlobalShutterClip = fs::path(GLAM_TEST_FIXTURES_DIR) / "lawnmower_small";
 constexpr double kReadoutMs = 30.0;  // the fixture's
 
 struct MappedClip {
@@ -30,17 +32,30 @@ struct MappedClip {
   MappingReport report;
 };
 
-MappedClip MapAndEvaluate(double readout_ms, bool calibrated, const std::string& name) {
+MappedClip MapAndEvaluate(const RollingShutterOptions& rolling_shutter, bool calibrated, const std::string& name,
+                          const fs::path& clip = kClip) {
   MappingOptions options;
-  options.rolling_shutter.readout_ms = readout_ms;
-  if (calibrated) UseCalibration(&options, ReadIntrinsicsJson(kClip / "intrinsics.json"));
+  options.rolling_shutter = rolling_shutter;
+  if (calibrated) UseCalibration(&options, ReadIntrinsicsJson(clip / "intrinsics.json"));
   const fs::path out = testing::FreshTempDir("rolling_shutter_" + name);
   MappedClip run;
-  run.report = RunMapping(kClip / "video.mp4", out, options);
-  run.result = eval::EvaluateDirectories(kClip, out, {});
+  run.report = RunMapping(clip / "video.mp4", out, options);
+  run.result = eval::EvaluateDirectories(clip, out, {});
   std::cout << name << ": focal " << run.report.focal << " px, " << eval::Summary(run.result) << "\n";
   fs::remove_all(out);
   return run;
+}
+
+RollingShutterOptions Readout(double ms) {
+  RollingShutterOptions o;
+  o.readout_ms = ms;
+  return o;
+}
+
+RollingShutterOptions Estimated() {
+  RollingShutterOptions o;
+  o.estimate = true;
+  return o;
 }
 
 TEST(RollingShutterMapping, TheReadoutGivenMapsAsWellAsAGlobalShutter) {
@@ -48,7 +63,7 @@ TEST(RollingShutterMapping, TheReadoutGivenMapsAsWellAsAGlobalShutter) {
   // Measured: ATE 0.057 m, map median 0.09 m (calibrated); focal -0.13 %, ATE 0.055 m,
   // map median 0.12 m (uncalibrated). The same flight with a global shutter maps to about the
   // same (docs/benchmarks.md).
-  const MappedClip corrected = MapAndEvaluate(kReadoutMs, true, "calibrated");
+  const MappedClip corrected = MapAndEvaluate(Readout(kReadoutMs), true, "calibrated");
   EXPECT_EQ(corrected.result.trajectory.fraction_posed, 1.0);
   EXPECT_LT(corrected.result.trajectory.ate_rmse, 0.12);
   ASSERT_TRUE(corrected.result.map.has_value());
@@ -58,18 +73,40 @@ TEST(RollingShutterMapping, TheReadoutGivenMapsAsWellAsAGlobalShutter) {
   EXPECT_GT(corrected.report.rolling_shutter_mean_shift_px, 0.2);
   EXPECT_LT(corrected.report.rolling_shutter_mean_shift_px, 2.0);
 
-  const MappedClip uncalibrated = MapAndEvaluate(kReadoutMs, false, "uncalibrated");
+  const MappedClip uncalibrated = MapAndEvaluate(Readout(kReadoutMs), false, "uncalibrated");
   EXPECT_NEAR(uncalibrated.report.focal / truth_focal, 1.0, 0.02);
   EXPECT_LT(uncalibrated.result.trajectory.ate_rmse, 0.12);
 
   // The control, the shutter taken as global: measured ATE 0.72 m, map median 3.95 m
   // (calibrated); uncalibrated the focal came out 13.7 % long. If this stops being much worse,
   // the clip no longer tests the case.
-  const MappedClip control = MapAndEvaluate(0.0, true, "global_shutter_assumed");
+  const MappedClip control = MapAndEvaluate(Readout(0), true, "global_shutter_assumed");
   EXPECT_EQ(control.report.rolling_shutter_ms, 0.0);
   EXPECT_GT(control.result.trajectory.ate_rmse, 4.0 * corrected.result.trajectory.ate_rmse);
   ASSERT_TRUE(control.result.map.has_value());
   EXPECT_GT(control.result.map->median, 4.0 * corrected.result.map->median);
+}
+
+// `--rolling-shutter-ms auto`: the first submap (a lawnmower leg and its turn) is profiled
+// over 0-60 ms and the best readout taken; a global-shutter clip keeps 0 and maps exactly as
+// without the option.
+TEST(RollingShutterMapping, TheReadoutIsEstimatedAndAGlobalShutterRecognised) {
+  const double truth_focal = ReadIntrinsicsJson(kClip / "intrinsics.json").fx;
+  // Measured: 28.7 ms, focal +0.2 %, ATE 0.073 m, map median 0.08 m.
+  const MappedClip estimated = MapAndEvaluate(Estimated(), false, "estimated");
+  EXPECT_TRUE(estimated.report.rolling_shutter_estimated);
+  EXPECT_NEAR(estimated.report.rolling_shutter_ms, kReadoutMs, 4.0);
+  EXPECT_EQ(estimated.report.rolling_shutter_decided_at_submap, 0);
+  EXPECT_GE(estimated.report.rolling_shutter_profile.size(), 7u);  // 0, 10, ..., 60 ms (+ the vertex)
+  EXPECT_NEAR(estimated.report.focal / truth_focal, 1.0, 0.02);
+  EXPECT_LT(estimated.result.trajectory.ate_rmse, 0.12);
+
+  const MappedClip global = MapAndEvaluate(Estimated(), true, "global_estimated", kGlobalShutterClip);
+  EXPECT_TRUE(global.report.rolling_shutter_estimated);
+  EXPECT_EQ(global.report.rolling_shutter_ms, 0.0);
+  const MappedClip plain = MapAndEvaluate(Readout(0), true, "global_plain", kGlobalShutterClip);
+  EXPECT_EQ(global.result.trajectory.ate_rmse, plain.result.trajectory.ate_rmse);
+  EXPECT_EQ(global.report.keyframes, plain.report.keyframes);
 }
 
 }  // namespace

@@ -12,6 +12,7 @@
 
 #include "engine/core/error.h"
 #include "engine/pipeline/decoder_worker.h"
+#include "engine/submap/frame_record.h"
 #include "tests/features/synthetic_texture.h"
 
 namespace glam {
@@ -164,6 +165,52 @@ TEST(RollingShutter, FlowModelIgnoresWrongTracks) {
   EXPECT_FALSE(model.Fit({points.begin(), points.begin() + 5}, {velocities.begin(), velocities.begin() + 5}, kImage, 12));
 }
 
+// Estimating: keypoints stay where they were seen and carry their motion per second of
+// readout, which CompactFeatures::ApplyReadout then applies for any readout.
+TEST(RollingShutter, EstimatingHandsOnRatesInsteadOfCorrecting) {
+  const std::vector<cv::Point2f> ground = Ground();
+  const double readout_s = 0.030;
+  const std::vector<FrameFeatures> raw = Frames(ground, 12, readout_s);
+  RollingShutterOptions options;
+  options.estimate = true;
+  RollingShutterCorrector corrector(options, kImage);
+  std::vector<FrameFeatures> out;
+  for (const FrameFeatures& f : raw) {
+    if (std::optional<FrameFeatures> o = corrector.Push(f)) out.push_back(std::move(*o));
+  }
+  if (std::optional<FrameFeatures> last = corrector.Flush()) out.push_back(std::move(*last));
+  ASSERT_EQ(out.size(), raw.size());
+  double worst = 0;
+  for (std::size_t k = 0; k < out.size(); ++k) {
+    const Features& f = out[k].features;
+    ASSERT_EQ(f.rolling_shutter_rates.size(), f.size());
+    for (std::size_t i = 0; i < f.size(); ++i) EXPECT_EQ(f.keypoints[i].pt, raw[k].features.keypoints[i].pt);
+    Features with_descriptors = f;  // what the feature stage hands on has them
+    with_descriptors.descriptors = cv::Mat::zeros(static_cast<int>(f.size()), 128, CV_32F);
+    with_descriptors.colors.assign(f.size(), Rgb{0, 0, 0});
+    CompactFeatures compact = CompactFeatures::From(with_descriptors);
+    compact.ApplyReadout(0.010);  // first a wrong readout, then the right one: no drift
+    compact.ApplyReadout(readout_s);
+    EXPECT_EQ(compact.readout_applied_s, readout_s);
+    for (std::size_t i = 0; i < f.size(); ++i) {
+      const cv::Point2f truth = TruePosition(ground[static_cast<std::size_t>(f.keypoints[i].class_id)], out[k].timestamp_s);
+      worst = std::max(worst, std::hypot(static_cast<double>(compact.points[i].x() - truth.x),
+                                         static_cast<double>(compact.points[i].y() - truth.y)));
+    }
+  }
+  EXPECT_LT(worst, 0.05);
+}
+
+TEST(RollingShutter, ReadoutFromText) {
+  EXPECT_TRUE(RollingShutterFromText("auto").estimate);
+  EXPECT_EQ(RollingShutterFromText("28.5").readout_ms, 28.5);
+  EXPECT_FALSE(RollingShutterFromText("0").enabled());
+  EXPECT_THROW(RollingShutterFromText("fast"), InputError);
+  EXPECT_THROW(RollingShutterFromText("30ms"), InputError);
+  EXPECT_THROW(RollingShutterFromText("-5"), InputError);
+  EXPECT_THROW(RollingShutterFromText(""), InputError);
+}
+
 TEST(RollingShutter, OptionsAreChecked) {
   RollingShutterOptions o;
   o.readout_ms = -1;
@@ -172,6 +219,9 @@ TEST(RollingShutter, OptionsAreChecked) {
   EXPECT_THROW(o.Check(), InputError);
   o.readout_ms = 30;
   o.min_model_points = 2;
+  EXPECT_THROW(o.Check(), InputError);
+  o.min_model_points = 12;
+  o.estimate = true;  // a readout given and estimated
   EXPECT_THROW(o.Check(), InputError);
 }
 

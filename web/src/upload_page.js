@@ -44,10 +44,12 @@ async function collectOptions(form) {
     if (!(f > 0)) throw new Error('the focal length must be a positive number of pixels');
     options.focal = f;
   }
-  const readout = form.elements.rolling_shutter_ms.value.trim();
-  if (readout) {
+  const readout = form.elements.rolling_shutter_ms.value.trim().toLowerCase();
+  if (readout === 'auto') {
+    options.rolling_shutter_ms = 'auto';
+  } else if (readout) {
     const ms = Number(readout);
-    if (!(ms >= 0 && ms <= 100)) throw new Error('the rolling-shutter readout must be between 0 and 100 ms');
+    if (!(ms >= 0 && ms <= 100)) throw new Error('the rolling-shutter readout must be between 0 and 100 ms, or auto');
     options.rolling_shutter_ms = ms;
   }
   if (intrinsicsFile) options.intrinsics = await readIntrinsics(intrinsicsFile);
