@@ -412,7 +412,8 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   report.frames_without_features = worker.frames_without_features();
   report.frames_detected = worker.frames_detected();
   report.rolling_shutter_ms = stats.readout_ms.value_or(worker.rolling_shutter_ms());
-  report.rolling_shutter_estimated = stats.readout_ms.has_value();
+  report.rolling_shutter_estimated = options.rolling_shutter.estimate;
+  report.rolling_shutter_determined = stats.readout_ms.has_value();
   report.rolling_shutter_profile = stats.readout_profile;
   report.rolling_shutter_decided_at_submap = stats.readout_decided_at_submap;
   report.rolling_shutter_mean_shift_px = worker.rolling_shutter_mean_shift_px();

@@ -43,7 +43,10 @@ struct MappingReport {
   // Rolling-shutter correction (RollingShutterOptions): the readout used (0 = none) and how far
   // keypoints were moved, on average and at most (pixels).
   double rolling_shutter_ms = 0;
-  bool rolling_shutter_estimated = false;  // readout estimated (auto): the profile's (ms, rms px)
+  // Readout estimated (auto), whether a profile determined it (else: left at 0, a flight of
+  // straight legs), and the last profile's (ms, rms px).
+  bool rolling_shutter_estimated = false;
+  bool rolling_shutter_determined = false;
   std::vector<std::pair<double, double>> rolling_shutter_profile;
   std::int64_t rolling_shutter_decided_at_submap = 0;  // estimated: the submap that decided it
   double rolling_shutter_mean_shift_px = 0;

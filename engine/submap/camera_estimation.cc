@@ -182,13 +182,14 @@ bool SubmapBuilder::DecideReadout() {
     const double ms = i * options_.readout_step_ms;
     profile.emplace_back(ms, ReadoutRms(1e-3 * ms));
   }
+  const std::size_t grid_size = profile.size();
   std::size_t best = 0;
-  for (std::size_t i = 1; i < profile.size(); ++i) {
+  for (std::size_t i = 1; i < grid_size; ++i) {
     if (profile[i].second < profile[best].second) best = i;
   }
   double best_ms = profile[best].first;
   double best_rms = profile[best].second;
-  if (best > 0 && best + 1 < profile.size()) {
+  if (best > 0 && best + 1 < grid_size) {
     // Vertex of the parabola through the best and its neighbours (equal spacing), tried too.
     const double a = profile[best - 1].second, b = profile[best].second, c = profile[best + 1].second;
     const double denominator = a - 2 * b + c;
@@ -204,22 +205,30 @@ bool SubmapBuilder::DecideReadout() {
   }
   const double none_rms = profile.front().second;
   const double gain = none_rms > 0 ? 1.0 - best_rms / none_rms : 0.0;
+  // How sharply the grid rises a step or more away from the best: a global shutter's profile
+  // rises from 0 ms at once (+12 % at 10 ms on a lawnmower clip), a straight leg's is flat.
+  double rise = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < grid_size; ++i) {
+    if (std::abs(profile[i].first - best_ms) >= options_.readout_step_ms - 1e-9 && best_rms > 0) {
+      rise = std::min(rise, profile[i].second / best_rms - 1.0);
+    }
+  }
   std::string tried;
   for (const auto& [ms, rms] : profile) tried += fmt::format(" {:.1f} ms {:.4f} px;", ms, rms);
   GLAM_LOG_INFO("rolling-shutter readout profile of submap {} ({} keyframes):{}", next_submap_id_,
                 open_.keyframes.size(), tried);
-  const bool decided = gain >= options_.readout_min_rms_gain;
+  const bool decided = (best_ms > 0 && gain >= options_.readout_min_rms_gain) || rise >= options_.readout_min_rms_gain;
   if (!decided && readout_profiles_ < options_.readout_max_submaps) {
     // Flying straight at constant speed, a rolling shutter squashes every frame alike, which
     // the submap absorbs as a world squashed along the track (a flat profile); turns and speed
     // changes tell the readout apart. The next submap is profiled again.
-    GLAM_LOG_INFO("rolling shutter: the readout profile of submap {} is flat (best {:.1f} ms, {:+.2f} %); "
-                  "profiling the next submap",
-                  next_submap_id_, best_ms, 100.0 * gain);
+    GLAM_LOG_INFO("rolling shutter: the readout profile of submap {} is flat (best {:.1f} ms, {:+.2f} % against "
+                  "none, {:+.2f} % a step away); profiling the next submap",
+                  next_submap_id_, best_ms, 100.0 * gain, 100.0 * rise);
     return false;
   }
   readout_decision_open_ = false;
-  const double chosen_s = decided ? 1e-3 * best_ms : 0.0;
+  const double chosen_s = decided && gain >= options_.readout_min_rms_gain ? 1e-3 * best_ms : 0.0;
   stats_.readout_ms = 1e3 * chosen_s;
   stats_.readout_decided_at_submap = next_submap_id_;
   if (chosen_s > 0) {
@@ -230,6 +239,7 @@ bool SubmapBuilder::DecideReadout() {
     GLAM_LOG_INFO("rolling shutter: no readout fits submap {} {:.1f} % better than a global shutter "
                   "(best {:.1f} ms, {:+.2f} %): keypoints left uncorrected",
                   next_submap_id_, 100.0 * options_.readout_min_rms_gain, best_ms, 100.0 * gain);
+    if (!decided) stats_.readout_ms.reset();  // undetermined, not a global shutter
   }
   if (std::abs(chosen_s - current_s) < 1e-6) return false;
   readout_s_ = chosen_s;

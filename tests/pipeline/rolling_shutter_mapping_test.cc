@@ -95,6 +95,7 @@ TEST(RollingShutterMapping, TheReadoutIsEstimatedAndAGlobalShutterRecognised) {
   // Measured: 28.7 ms, focal +0.2 %, ATE 0.073 m, map median 0.08 m.
   const MappedClip estimated = MapAndEvaluate(Estimated(), false, "estimated");
   EXPECT_TRUE(estimated.report.rolling_shutter_estimated);
+  EXPECT_TRUE(estimated.report.rolling_shutter_determined);
   EXPECT_NEAR(estimated.report.rolling_shutter_ms, kReadoutMs, 4.0);
   EXPECT_EQ(estimated.report.rolling_shutter_decided_at_submap, 0);
   EXPECT_GE(estimated.report.rolling_shutter_profile.size(), 7u);  // 0, 10, ..., 60 ms (+ the vertex)
@@ -103,6 +104,7 @@ TEST(RollingShutterMapping, TheReadoutIsEstimatedAndAGlobalShutterRecognised) {
 
   const MappedClip global = MapAndEvaluate(Estimated(), true, "global_estimated", kGlobalShutterClip);
   EXPECT_TRUE(global.report.rolling_shutter_estimated);
+  EXPECT_TRUE(global.report.rolling_shutter_determined);  // its profile rises from 0 ms at once
   EXPECT_EQ(global.report.rolling_shutter_ms, 0.0);
   const MappedClip plain = MapAndEvaluate(Readout(0), true, "global_plain", kGlobalShutterClip);
   EXPECT_EQ(global.result.trajectory.ate_rmse, plain.result.trajectory.ate_rmse);
