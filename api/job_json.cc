@@ -205,8 +205,11 @@ MappingOptions ToMappingOptions(const JobOptions& o) {
   if (o.smooth_window_s) m.submap.centre_smoothing.half_window_s = *o.smooth_window_s;
   if (o.name_order && *o.name_order) m.source.photos_by_capture_time = false;  // as --name-order
   if (o.global_refinement_keyframes) m.global_refinement.max_keyframes = *o.global_refinement_keyframes;
-  if (o.rolling_shutter_ms) m.rolling_shutter.readout_ms = *o.rolling_shutter_ms;
-  if (o.rolling_shutter_auto) m.rolling_shutter.estimate = true;  // as --rolling-shutter-ms auto
+  if (o.rolling_shutter_ms) {  // as --rolling-shutter-ms MS (0: a global shutter)
+    m.rolling_shutter = RollingShutterOptions{};
+    m.rolling_shutter.readout_ms = *o.rolling_shutter_ms;
+  }
+  if (o.rolling_shutter_auto) m.rolling_shutter = EstimatedRollingShutter();  // the default
   m.Check();
   return m;
 }

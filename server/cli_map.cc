@@ -36,7 +36,7 @@ struct MapArgs {
   std::string gps_path;
   bool no_gps = false;
   bool max_features_given = false;  // --max-features on the command line
-  std::string rolling_shutter = "0";  // --rolling-shutter-ms: milliseconds or "auto"
+  std::string rolling_shutter = "auto";  // --rolling-shutter-ms: milliseconds or "auto"
   bool paper = false;
   MappingOptions options;
 };
@@ -236,7 +236,7 @@ void RegisterMapCommand(CLI::App& app) {
       "adjustment, ...; docs/algorithm.md); slower");
   for (const char* name : {"--detect-every", "--feature-grid", "--keyframe-parallax", "--keyframe-coverage",
                            "--bootstrap-parallax", "--completion-ba-frames", "--smooth-window",
-                           "--per-keyframe-focal", "--global-refinement-keyframes"}) {
+                           "--per-keyframe-focal", "--global-refinement-keyframes", "--rolling-shutter-ms"}) {
     paper->excludes(name);
   }
   cmd->add_flag("--resume", args->options.resume,

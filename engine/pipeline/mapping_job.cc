@@ -236,7 +236,8 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
                 report.frames_total, intrinsics.fx);
 
   SubmapOptions submap_options = options.submap;
-  submap_options.estimate_readout = options.rolling_shutter.estimate;
+  submap_options.estimate_readout =
+      options.rolling_shutter.estimate && options.EffectiveDetectionInterval(info.fps) > 1;
   SubmapBuilder builder(intrinsics, submap_options, cancel);
   if (resume) builder.ResumeAt(resume->next_submap_id, resume->focal_held, resume->k1_held, resume->readout_ms);
   SubmapAligner aligner(vocabulary, options.alignment, submaps_root, cancel);
@@ -266,6 +267,9 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   feature_stage.detection_interval = options.EffectiveDetectionInterval(info.fps);
   feature_stage.min_features = static_cast<std::size_t>(min_features);
   feature_stage.rolling_shutter = options.rolling_shutter;
+  // Without KLT tracks there is no image motion to estimate the readout from (photo folders,
+  // SIFT on every frame); a readout given is warned about by the feature stage.
+  if (feature_stage.detection_interval == 1) feature_stage.rolling_shutter.estimate = false;
   report.detection_interval = feature_stage.detection_interval;
   DecoderWorker worker(*source, feature_stage, queue, cancel, stop);
   std::thread decoder([&worker] {
@@ -412,7 +416,7 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   report.frames_without_features = worker.frames_without_features();
   report.frames_detected = worker.frames_detected();
   report.rolling_shutter_ms = stats.readout_ms.value_or(worker.rolling_shutter_ms());
-  report.rolling_shutter_estimated = options.rolling_shutter.estimate;
+  report.rolling_shutter_estimated = submap_options.estimate_readout;
   report.rolling_shutter_determined = stats.readout_ms.has_value();
   report.rolling_shutter_profile = stats.readout_profile;
   report.rolling_shutter_decided_at_submap = stats.readout_decided_at_submap;

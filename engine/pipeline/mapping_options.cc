@@ -58,6 +58,7 @@ void UsePaperMethod(MappingOptions* options) {
   options->alignment.local_window = 0;
   options->alignment.max_demotable_submaps = 0;
   options->global_refinement.max_keyframes = 0;
+  options->rolling_shutter = RollingShutterOptions{};  // a global shutter
 }
 
 void UseCalibration(MappingOptions* options, const Intrinsics& intrinsics) {

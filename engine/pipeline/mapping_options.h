@@ -65,8 +65,12 @@ struct MappingOptions {
   int detection_interval = 0;
   KltOptions klt;
   // The camera's rolling shutter: keypoints are moved to where they were at the frame's middle
-  // row (engine/pipeline/rolling_shutter.h). readout_ms = 0 (default): a global shutter.
-  RollingShutterOptions rolling_shutter;
+  // row (engine/pipeline/rolling_shutter.h). Default: the readout is estimated on the first
+  // submaps (most drone cameras record video with a rolling shutter; a global-shutter video is
+  // recognised as one and maps exactly as without, docs/algorithm.md); a readout given
+  // (`--rolling-shutter-ms`) is used as it is, 0 = a global shutter. Photo folders and SIFT on
+  // every frame have no KLT tracks to measure the motion: nothing is estimated there.
+  RollingShutterOptions rolling_shutter = EstimatedRollingShutter();
   // Continue an interrupted run in the same out_dir: submaps already persisted there are
   // reloaded and decoding restarts at the first frame the next submap needs, instead of
   // mapping the whole input again (a server restart after a crash uses this).

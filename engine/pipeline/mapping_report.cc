@@ -164,13 +164,9 @@ std::vector<std::string> Diagnose(const MappingReport& r, int min_features) {
         "accurate as the GPS",
         part.first_frame, part.last_frame, part.fit.rms_m));
   }
-  if (r.rolling_shutter_estimated && !r.rolling_shutter_determined) {
-    warnings.push_back(
-        "the rolling-shutter readout could not be estimated (no submap of the flight tells it apart: "
-        "straight legs at constant speed squash every frame alike), so keypoints were left "
-        "uncorrected; if the camera has a rolling shutter, give its readout (glam map "
-        "--rolling-shutter-ms MS, or the job option rolling_shutter_ms)");
-  }
+  // Not determined (every profile flat) is no warning: a global-shutter flight over low relief
+  // or at low image speed gives flat profiles too (the loop test clip), and there a correction
+  // would not matter. report.json rolling_shutter.determined says so.
   if (r.rolling_shutter_estimated && r.rolling_shutter_ms > 0 && r.rolling_shutter_decided_at_submap > 0) {
     warnings.push_back(fmt::format(
         "the rolling-shutter readout ({:.1f} ms) could only be estimated on submap {}, so the {} "

@@ -22,6 +22,12 @@ void RollingShutterOptions::Check() const {
   }
 }
 
+RollingShutterOptions EstimatedRollingShutter() {
+  RollingShutterOptions options;
+  options.estimate = true;
+  return options;
+}
+
 RollingShutterOptions RollingShutterFromText(const std::string& text) {
   RollingShutterOptions options;
   if (text == "auto") {

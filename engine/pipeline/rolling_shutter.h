@@ -62,6 +62,8 @@ struct RollingShutterOptions {
 
 // "auto" (estimate) or a readout in milliseconds ("0" = global shutter); InputError otherwise.
 RollingShutterOptions RollingShutterFromText(const std::string& text);
+// Options that ask for the readout's estimate (MappingOptions' default).
+RollingShutterOptions EstimatedRollingShutter();
 
 // Image velocity field of one frame: v(x, y) = quadratic in normalised image coordinates,
 // per component (pixels per second).

@@ -75,7 +75,10 @@ TEST(JobJson, ParsesOptionsAndMapsThemToEngineOptions) {
   // rolling_shutter_ms is the camera's readout time (0 = global shutter, the default).
   const JobOptions rolling = ParseJobOptionsText(R"({"rolling_shutter_ms": 28.5})");
   EXPECT_EQ(ToMappingOptions(rolling).rolling_shutter.readout_ms, 28.5);
-  EXPECT_FALSE(ToMappingOptions(JobOptions{}).rolling_shutter.enabled());
+  EXPECT_FALSE(ToMappingOptions(rolling).rolling_shutter.estimate);
+  EXPECT_TRUE(ToMappingOptions(JobOptions{}).rolling_shutter.estimate);  // the default: estimated
+  const JobOptions global = ParseJobOptionsText(R"({"rolling_shutter_ms": 0})");
+  EXPECT_FALSE(ToMappingOptions(global).rolling_shutter.enabled());
   EXPECT_EQ(ToJson(rolling), json::parse(R"({"rolling_shutter_ms": 28.5})"));
   const JobOptions estimated = ParseJobOptionsText(R"({"rolling_shutter_ms": "auto"})");
   EXPECT_TRUE(ToMappingOptions(estimated).rolling_shutter.estimate);
