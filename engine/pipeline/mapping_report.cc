@@ -228,6 +228,7 @@ nlohmann::json MappingReport::ToJson() const {
            {{"readout_ms", rolling_shutter_ms},
             {"estimated", rolling_shutter_estimated},
             {"determined", rolling_shutter_determined},
+            {"decided_at_submap", rolling_shutter_decided_at_submap},
             {"profile", RollingShutterProfileJson(rolling_shutter_profile)},
             {"mean_shift_px", rolling_shutter_mean_shift_px},
             {"max_shift_px", rolling_shutter_max_shift_px}}},
