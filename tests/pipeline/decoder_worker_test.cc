@@ -13,6 +13,7 @@
 
 #include "engine/core/error.h"
 #include "tests/features/synthetic_texture.h"
+#include "tests/pipeline/feature_stage_runner.h"
 
 namespace glam {
 namespace {
@@ -51,16 +52,7 @@ class PanningSource : public FrameSource {
 };
 
 std::vector<FrameFeatures> RunWorker(FrameSource& source, const FeatureStageOptions& options) {
-  BoundedQueue<FrameFeatures> queue(4);
-  std::atomic<bool> stop{false};
-  DecoderWorker worker(source, options, queue, {}, stop);
-  std::thread t([&] { worker.Run(); });
-  std::vector<FrameFeatures> items;
-  while (std::optional<FrameFeatures> item = queue.Pop()) items.push_back(std::move(*item));
-  t.join();
-  if (worker.error()) std::rethrow_exception(worker.error());
-  EXPECT_EQ(worker.frames(), static_cast<std::int64_t>(items.size()));
-  return items;
+  return testing::RunFeatureStage(source, options);
 }
 
 FeatureStageOptions Options(int interval, int workers) {

@@ -3,9 +3,7 @@
 // velocity from their own KLT tracks or, without one, from the frame's flow model.
 #include "engine/pipeline/rolling_shutter.h"
 
-#include <atomic>
 #include <cmath>
-#include <thread>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
@@ -14,6 +12,7 @@
 #include "engine/pipeline/decoder_worker.h"
 #include "engine/submap/frame_record.h"
 #include "tests/features/synthetic_texture.h"
+#include "tests/pipeline/feature_stage_runner.h"
 
 namespace glam {
 namespace {
@@ -277,16 +276,7 @@ std::vector<FrameFeatures> RunPan(double readout_ms) {
   options.sift.max_features = 400;
   options.detection_interval = 6;
   options.rolling_shutter.readout_ms = readout_ms;
-  BoundedQueue<FrameFeatures> queue(4);
-  std::atomic<bool> stop{false};
-  DecoderWorker worker(source, options, queue, {}, stop);
-  std::thread t([&] { worker.Run(); });
-  std::vector<FrameFeatures> items;
-  while (std::optional<FrameFeatures> item = queue.Pop()) items.push_back(std::move(*item));
-  t.join();
-  if (worker.error()) std::rethrow_exception(worker.error());
-  EXPECT_EQ(worker.frames(), static_cast<std::int64_t>(items.size()));
-  return items;
+  return testing::RunFeatureStage(source, options);
 }
 
 TEST(RollingShutter, TheFeatureStageCorrectsKeypointsByTheirTracksMotion) {
