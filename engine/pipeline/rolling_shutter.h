@@ -27,9 +27,12 @@
 // frame (SiftExtractor sets it, KltPropagator keeps it), and a frame that was not detected
 // shares its detection frame with the frame before it.
 //
-// The readout time is the camera's (a property of sensor and video mode); `glam map
-// --rolling-shutter-ms`. Without KLT tracks (SIFT on every frame, photo folders) nothing is
-// corrected.
+// The readout time is the camera's (a property of sensor and video mode): given (`glam map
+// --rolling-shutter-ms MS`), or estimated (`auto`, the default of `glam map` and of jobs): the
+// stage then hands keypoints on uncorrected with their motion per second of readout
+// (Features::rolling_shutter_rates), and the submap builder picks the readout whose
+// correction best fits the first submaps (SubmapOptions::estimate_readout). Without KLT
+// tracks (SIFT on every frame, photo folders) nothing is corrected or estimated.
 #pragma once
 
 #include <array>

@@ -7,9 +7,9 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 #include <string>
 #include <unordered_map>
-#include <limits>
 
 #include <fmt/format.h>
 
@@ -33,9 +33,9 @@ double SubmapBuilder::CameraChangeSinceSubmapStart() const {
 }
 
 bool SubmapBuilder::RebuildIfCameraMoved(std::vector<Submap>* completed) {
-  // The readout comes first (the other decisions are then taken on corrected keypoints), once,
-  // calibrated or not, whatever the rebuild count.
-  // One profile per submap (a camera rebuild of the same submap is not profiled again).
+  // The readout comes first (the other decisions are then taken on corrected keypoints),
+  // calibrated or not, whatever the rebuild count; one profile per submap (a camera rebuild of
+  // the same submap is not profiled again) until decided.
   if (readout_decision_open_ && readout_profiled_submap_ != static_cast<std::int64_t>(next_submap_id_) &&
       CameraDecidingSubmap() && open_.start_focal > 0 && DecideReadout()) {
     ++stats_.submap_rebuilds;
