@@ -199,7 +199,7 @@ struct SubmapOptions {
   // Rolling-shutter readout estimated on the first submap (frames carry
   // CompactFeatures::rolling_shutter_rates; `glam map --rolling-shutter-ms auto`): when it
   // completes, its keyframes are bundle adjusted on a copy with their observations corrected
-  // for readouts 0, step, 2 step, ... up to readout_max_ms, and the readout with the lowest
+  // for readouts 0, step, 2 step, ... up to readout_max_ms (0, 15, 30, 45, 60 ms), and the readout with the lowest
   // reprojection rms (refined by a parabola through its neighbours) is taken if it fits at
   // least readout_min_rms_gain (relative) better than none; the submap is then tracked again
   // with its frames corrected. Why by the rms: a wrong readout, too short or too long, leaves
@@ -212,7 +212,7 @@ struct SubmapOptions {
   bool estimate_readout = false;
   int readout_max_submaps = 3;
   double readout_max_ms = 60.0;
-  double readout_step_ms = 10.0;
+  double readout_step_ms = 15.0;
   double readout_min_rms_gain = 0.02;
   // The focal prior's weight (bundle_adjustment.focal_prior_weight) is multiplied by
   // 1 + focal_prior_growth * (keyframes of completed submaps): what earlier submaps agreed on

@@ -98,7 +98,7 @@ TEST(RollingShutterMapping, TheReadoutIsEstimatedAndAGlobalShutterRecognised) {
   EXPECT_TRUE(estimated.report.rolling_shutter_determined);
   EXPECT_NEAR(estimated.report.rolling_shutter_ms, kReadoutMs, 4.0);
   EXPECT_EQ(estimated.report.rolling_shutter_decided_at_submap, 0);
-  EXPECT_GE(estimated.report.rolling_shutter_profile.size(), 7u);  // 0, 10, ..., 60 ms (+ the vertex)
+  EXPECT_GE(estimated.report.rolling_shutter_profile.size(), 5u);  // 0, 15, ..., 60 ms (+ the vertex)
   EXPECT_NEAR(estimated.report.focal / truth_focal, 1.0, 0.02);
   EXPECT_LT(estimated.result.trajectory.ate_rmse, 0.12);
 
