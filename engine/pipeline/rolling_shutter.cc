@@ -128,15 +128,15 @@ RollingShutterCorrector::Track RollingShutterCorrector::TrackOf(const FrameFeatu
 }
 
 std::optional<FrameFeatures> RollingShutterCorrector::Push(FrameFeatures next) {
-  Track next_track = TrackOf(next);
+  Track next_track = TrackOf(next);  // raw positions, before next is corrected in turn
   std::optional<FrameFeatures> out;
   if (pending_) {
-    Track pending_track = TrackOf(*pending_);
     Correct(*pending_, &next_track);
     out = std::move(pending_);
-    previous_ = std::move(pending_track);
+    previous_ = std::move(pending_track_);
   }
   pending_ = std::move(next);
+  pending_track_ = std::move(next_track);
   return out;
 }
 
@@ -145,6 +145,7 @@ std::optional<FrameFeatures> RollingShutterCorrector::Flush() {
   Correct(*pending_, nullptr);
   std::optional<FrameFeatures> out = std::move(pending_);
   pending_.reset();
+  pending_track_.reset();
   previous_.reset();
   return out;
 }

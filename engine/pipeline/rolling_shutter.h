@@ -118,6 +118,7 @@ class RollingShutterCorrector {
   cv::Size image_size_;
   std::optional<Track> previous_;       // raw positions of the frame before pending_
   std::optional<FrameFeatures> pending_;
+  std::optional<Track> pending_track_;  // raw positions of pending_, taken when it arrived
   FlowModel last_model_;
   double shift_sum_ = 0, shift_max_ = 0;
   long long corrected_ = 0;
