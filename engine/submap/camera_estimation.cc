@@ -22,10 +22,63 @@ namespace {
 // Iteration cap of each adjustment of the focal profile and the k1 test (run once per job;
 // from the free optimum they converge in 8-25 iterations on the clips measured).
 constexpr int kCameraTestIterations = 100;
-// Each adjustment of the readout profile: it starts at the submap's optimum for the current
-// readout, and the profile only ranks readouts, so a few iterations are enough (the lawnmower
-// benchmark video: 8 adjustments at 100 iterations cost ~1.5 s).
+// Each adjustment of the readout profile: it starts at the optimum of the readout tried before
+// (one grid step away), and the profile only ranks readouts, so a few iterations are enough
+// (the lawnmower benchmark video: 8 adjustments at 100 iterations cost ~1.5 s).
 constexpr int kReadoutProfileIterations = 15;
+// The profile adjusts a subset of the submap's landmarks: the readout is one number shared by
+// every observation, and a few thousand residuals rank it as well as all of them do (the loop
+// benchmark video, ~5000 landmarks per submap: the profile cost a sixth of the builder thread).
+constexpr std::size_t kReadoutProfileMaxLandmarks = 1500;
+
+}  // namespace
+
+// The open submap's keyframes and (a subset of) its landmarks, each observation with the image
+// motion per second of readout of its keypoint, for adjustments at other readouts.
+struct ReadoutProblem {
+  std::vector<Keyframe> keyframes;
+  std::vector<Landmark> landmarks;                    // observations at the current readout
+  std::vector<std::vector<Eigen::Vector2f>> rates;    // per landmark, per observation
+};
+
+namespace {
+
+// `keyframe_features[k]`: the features of keyframe k's frame.
+ReadoutProblem MakeReadoutProblem(const std::vector<Keyframe>& keyframes, const std::vector<Landmark>& all_landmarks,
+                                  const std::vector<const CompactFeatures*>& keyframe_features,
+                                  std::size_t max_landmarks) {
+  // Observations are copies of their keyframe's keypoints, found by position (exact: both
+  // are the same floats).
+  const auto key = [](const Eigen::Vector2f& p) {
+    std::uint32_t x, y;
+    std::memcpy(&x, &p.x(), sizeof x);
+    std::memcpy(&y, &p.y(), sizeof y);
+    return (static_cast<std::uint64_t>(x) << 32) | y;
+  };
+  std::vector<std::unordered_map<std::uint64_t, Eigen::Vector2f>> rates(keyframes.size());
+  for (std::size_t k = 0; k < keyframes.size(); ++k) {
+    const CompactFeatures& features = *keyframe_features[k];
+    if (features.rolling_shutter_rates.size() != features.size()) continue;
+    for (std::size_t i = 0; i < features.size(); ++i) rates[k][key(features.points[i])] = features.rolling_shutter_rates[i];
+  }
+  ReadoutProblem problem;
+  problem.keyframes = keyframes;
+  // An even stride through the landmarks (triangulated in flight order, so spread over the
+  // whole submap).
+  const std::size_t stride = std::max<std::size_t>(1, (all_landmarks.size() + max_landmarks - 1) / max_landmarks);
+  for (std::size_t l = 0; l < all_landmarks.size(); l += stride) {
+    const Landmark& landmark = all_landmarks[l];
+    std::vector<Eigen::Vector2f> of_landmark;
+    for (const Observation& observation : landmark.observations) {
+      const auto& of_keyframe = rates[observation.keyframe];
+      const auto it = of_keyframe.find(key(observation.pixel));
+      of_landmark.push_back(it != of_keyframe.end() ? it->second : Eigen::Vector2f::Zero());
+    }
+    problem.landmarks.push_back(landmark);
+    problem.rates.push_back(std::move(of_landmark));
+  }
+  return problem;
+}
 
 }  // namespace
 
@@ -182,9 +235,16 @@ bool SubmapBuilder::DecideReadout() {
   const double current_s = readout_s_;
   std::vector<std::pair<double, double>>& profile = stats_.readout_profile;
   profile.clear();
+  std::vector<const CompactFeatures*> keyframe_features;
+  for (std::size_t position : open_.keyframe_frame_positions) keyframe_features.push_back(&open_.frames[position].features);
+  const ReadoutProblem problem =
+      MakeReadoutProblem(open_.keyframes, open_.landmarks, keyframe_features, kReadoutProfileMaxLandmarks);
+  // Each grid point's adjustment starts at the previous one's optimum (continuation).
+  std::vector<ReadoutSolution> solutions;
   for (int i = 0; i * options_.readout_step_ms <= options_.readout_max_ms + 1e-9; ++i) {
     const double ms = i * options_.readout_step_ms;
-    profile.emplace_back(ms, ReadoutRms(1e-3 * ms));
+    solutions.push_back(AdjustAtReadout(problem, 1e-3 * ms, solutions.empty() ? nullptr : &solutions.back()));
+    profile.emplace_back(ms, solutions.back().rms_px);
   }
   const std::size_t grid_size = profile.size();
   std::size_t best = 0;
@@ -199,7 +259,7 @@ bool SubmapBuilder::DecideReadout() {
     const double denominator = a - 2 * b + c;
     if (denominator > 0) {
       const double vertex_ms = best_ms + 0.5 * options_.readout_step_ms * (a - c) / denominator;
-      const double vertex_rms = ReadoutRms(1e-3 * vertex_ms);
+      const double vertex_rms = AdjustAtReadout(problem, 1e-3 * vertex_ms, &solutions[best]).rms_px;
       profile.emplace_back(vertex_ms, vertex_rms);
       if (vertex_rms < best_rms) {
         best_ms = vertex_ms;
@@ -250,36 +310,27 @@ bool SubmapBuilder::DecideReadout() {
   return true;
 }
 
-double SubmapBuilder::ReadoutRms(double readout_s) {
-  // Observations are copies of their keyframe's keypoints, found by position (exact: both
-  // are the same floats).
-  const auto key = [](const Eigen::Vector2f& p) {
-    std::uint32_t x, y;
-    std::memcpy(&x, &p.x(), sizeof x);
-    std::memcpy(&y, &p.y(), sizeof y);
-    return (static_cast<std::uint64_t>(x) << 32) | y;
-  };
-  std::vector<std::unordered_map<std::uint64_t, Eigen::Vector2f>> rates(open_.keyframes.size());
-  for (std::size_t k = 0; k < open_.keyframes.size(); ++k) {
-    const CompactFeatures& features = open_.frames[open_.keyframe_frame_positions[k]].features;
-    if (features.rolling_shutter_rates.size() != features.size()) continue;
-    for (std::size_t i = 0; i < features.size(); ++i) rates[k][key(features.points[i])] = features.rolling_shutter_rates[i];
-  }
-  std::vector<Keyframe> keyframes = open_.keyframes;
-  std::vector<Landmark> landmarks = open_.landmarks;
+SubmapBuilder::ReadoutSolution SubmapBuilder::AdjustAtReadout(const ReadoutProblem& problem, double readout_s,
+                                                              const ReadoutSolution* start) {
+  ReadoutSolution solution;
+  solution.keyframes = start != nullptr ? start->keyframes : problem.keyframes;
+  solution.points.reserve(problem.landmarks.size());
+  std::vector<Landmark> landmarks = problem.landmarks;
   const auto step = static_cast<float>(readout_s - readout_s_);
-  for (Landmark& landmark : landmarks) {
-    for (Observation& observation : landmark.observations) {
-      const auto& of_keyframe = rates[observation.keyframe];
-      const auto it = of_keyframe.find(key(observation.pixel));
-      if (it != of_keyframe.end()) observation.pixel -= step * it->second;
+  for (std::size_t l = 0; l < landmarks.size(); ++l) {
+    if (start != nullptr) landmarks[l].point_in_submap = start->points[l];
+    for (std::size_t o = 0; o < landmarks[l].observations.size(); ++o) {
+      landmarks[l].observations[o].pixel -= step * problem.rates[l][o];
     }
   }
   BundleAdjustmentOptions ba = options_.bundle_adjustment;
   ba.max_iterations = kReadoutProfileIterations;
-  const BundleAdjustmentSummary summary = BundleAdjust(CurrentCamera().intrinsics(), keyframes, landmarks, ba, cancel_);
+  const BundleAdjustmentSummary summary =
+      BundleAdjust(CurrentCamera().intrinsics(), solution.keyframes, landmarks, ba, cancel_);
   stats_.bundle_adjust_seconds += summary.seconds;
-  return summary.final_rms_pixels;
+  for (const Landmark& landmark : landmarks) solution.points.push_back(landmark.point_in_submap);
+  solution.rms_px = summary.final_rms_pixels;
+  return solution;
 }
 
 }  // namespace glam

@@ -70,6 +70,9 @@ struct SubmapBuilderStats {
   std::int64_t readout_decided_at_submap = 0;
 };
 
+// The rolling-shutter readout profile's adjustment problem (camera_estimation.cc).
+struct ReadoutProblem;
+
 class SubmapBuilder {
  public:
   // `intrinsics` at processing size; its fx is the initial focal guess, refined by BA.
@@ -219,9 +222,15 @@ class SubmapBuilder {
   // most readout_max_submaps): the readout profile. Returns whether the readout changed (the caller then re-tracks the open submap, whose
   // frames Process() corrects for the new readout).
   bool DecideReadout();
-  // Reprojection rms of the open submap bundle adjusted on a copy whose observations are
-  // corrected for `readout_s` instead of the current readout.
-  double ReadoutRms(double readout_s);
+  // The open submap's keyframes and a subset of its landmarks bundle adjusted on a copy whose
+  // observations are corrected for `readout_s` instead of the current readout, starting from
+  // `start` (another readout's solution) or from the submap's current state.
+  struct ReadoutSolution {
+    std::vector<Keyframe> keyframes;
+    std::vector<Eigen::Vector3d> points;  // per landmark of the problem
+    double rms_px = 0;
+  };
+  ReadoutSolution AdjustAtReadout(const ReadoutProblem& problem, double readout_s, const ReadoutSolution* start);
   // On the job's first submap, once, while k1 is refined: the k1 profile, and HoldInitialK1()
   // when it says the images do not ask for the estimate. Returns whether it held k1, nullopt
   // when it did not decide (already decided, decisions closed, k1 not refined).
