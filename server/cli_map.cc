@@ -75,9 +75,11 @@ void DrawProgress(const MappingProgress& p, bool tty) {
 }
 
 void RunMap(MapArgs& args) {
-  if (args.paper) UsePaperMethod(&args.options);  // the options it sets exclude --paper
+  // The calibration first: --paper then undoes what it turns on beyond the paper (epipolar
+  // matching); the options --paper sets exclude the flags below.
+  if (!args.intrinsics_path.empty()) UseCalibration(&args.options, ReadIntrinsicsJson(args.intrinsics_path));
+  if (args.paper) UsePaperMethod(&args.options);
   if (!args.intrinsics_path.empty()) {
-    UseCalibration(&args.options, ReadIntrinsicsJson(args.intrinsics_path));
     args.options.submap.bundle_adjustment.refine_focal = args.refine_focal;  // --refine-focal
   }
   if (args.fixed_k1) args.options.submap.bundle_adjustment.refine_k1 = false;

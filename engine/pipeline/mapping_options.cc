@@ -54,6 +54,8 @@ void UsePaperMethod(MappingOptions* options) {
   submap.hover_max_speed = 0;
   submap.focal_profile_step = 0;
   submap.bundle_adjustment.refine_k1 = false;
+  submap.epipolar_triangulation_matching = false;
+  submap.duplicate_check_in_view = false;
   options->alignment.use_shared_frames = false;
   options->alignment.local_window = 0;
   options->alignment.max_demotable_submaps = 0;
@@ -65,6 +67,8 @@ void UseCalibration(MappingOptions* options, const Intrinsics& intrinsics) {
   options->intrinsics = intrinsics;
   options->submap.bundle_adjustment.refine_focal = false;
   options->submap.bundle_adjustment.refine_k1 = false;
+  // Epipolar lines are only as good as the camera model they are drawn with.
+  options->submap.epipolar_triangulation_matching = true;
 }
 
 Intrinsics ResolveIntrinsics(const MappingOptions& options, const FrameSourceInfo& info) {

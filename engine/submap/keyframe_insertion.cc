@@ -12,6 +12,7 @@
 
 #include "engine/core/logging.h"
 #include "engine/core/median.h"
+#include "engine/features/epipolar_matcher.h"
 #include "engine/features/feature_grid.h"
 #include "engine/features/feature_matcher.h"
 #include "engine/features/guided_matcher.h"
@@ -108,6 +109,53 @@ void SubmapBuilder::ObserveNewLandmarksInEarlierKeyframes(std::size_t first_new)
   GLAM_LOG_TRACE("{} observations of new landmarks found in earlier keyframes", added);
 }
 
+std::vector<Match> SubmapBuilder::MatchForTriangulation(const FrameRecord& first, const std::vector<int>& rows_first,
+                                                       const FrameRecord& second,
+                                                       const std::vector<int>& rows_second) const {
+  // Query = the second frame's unmatched features, train = the first frame's.
+  const Camera camera = CurrentCamera();
+  const cv::Mat first_descriptors = first.features.FloatDescriptors(rows_first);
+  const cv::Mat second_descriptors = second.features.FloatDescriptors(rows_second);
+  const auto normalised = [&](const FrameRecord& frame, const std::vector<int>& rows) {
+    std::vector<Eigen::Vector2d> out;
+    out.reserve(rows.size());
+    for (int r : rows) out.push_back(camera.Unproject(frame.features.points[r].cast<double>()).head<2>());
+    return out;
+  };
+  if (options_.epipolar_triangulation_matching) {
+    EpipolarMatchOptions epipolar;
+    epipolar.max_line_distance_px = options_.max_new_point_reprojection_pixels;
+    epipolar.ratio = static_cast<float>(options_.epipolar_match_ratio);
+    epipolar.mutual = true;
+    const SE3 cam_first_from_cam_second = *first.cam_from_submap * second.cam_from_submap->Inverse();
+    return MatchAlongEpipolarLines(second_descriptors, normalised(second, rows_second), first_descriptors,
+                                   normalised(first, rows_first), cam_first_from_cam_second,
+                                   camera.intrinsics().fx, epipolar);
+  }
+  // The paper: global matching, then the essential matrix's RANSAC selects consistent matches.
+  MatchOptions match_options;
+  match_options.ratio = static_cast<float>(options_.match_ratio);
+  match_options.mutual = true;
+  const std::vector<Match> matches = MatchDescriptors(second_descriptors, first_descriptors, match_options);
+  if (matches.size() < 8) return {};
+  const std::vector<Eigen::Vector2d> first_rays = normalised(first, rows_first);
+  const std::vector<Eigen::Vector2d> second_rays = normalised(second, rows_second);
+  std::vector<TwoViewCorrespondence> rays;
+  for (const Match& m : matches) rays.push_back({first_rays[m.train], second_rays[m.query]});
+  RansacOptions ransac;
+  ransac.inlier_threshold = options_.pnp_threshold_pixels;
+  // The essential matrix only selects consistent matches; triangulation checks depth and angle.
+  const RelativePoseResult rel = EstimateRelativePose(rays, camera.intrinsics().fx, ransac, 1e4);
+  GLAM_LOG_TRACE("keyframe pair {}-{}: {} matches, {} essential inliers", first.index, second.index,
+                 matches.size(), rel.num_inliers);
+  if (!rel.success) return {};
+  std::vector<Match> inliers;
+  for (std::size_t i = 0; i < matches.size(); ++i) {
+    if (rel.inlier_mask[i]) inliers.push_back(matches[i]);
+  }
+  return inliers;
+}
+
 std::size_t SubmapBuilder::TriangulateBetween(std::size_t first_position, std::size_t second_position) {
   FrameRecord& first = open_.frames[first_position];
   FrameRecord& second = open_.frames[second_position];
@@ -124,27 +172,15 @@ std::size_t SubmapBuilder::TriangulateBetween(std::size_t first_position, std::s
     if (!used_second.count(i)) rows_second.push_back(i);
   if (rows_first.size() < 8 || rows_second.size() < 8) return 0;
 
-  MatchOptions match_options;
-  match_options.ratio = static_cast<float>(options_.match_ratio);
-  match_options.mutual = true;
-  const cv::Mat first_descriptors = first.features.FloatDescriptors(rows_first);
-  const std::vector<Match> matches =
-      MatchDescriptors(second.features.FloatDescriptors(rows_second), first_descriptors, match_options);
+  const std::vector<Match> matches = MatchForTriangulation(first, rows_first, second, rows_second);
+  GLAM_LOG_TRACE("keyframe pair {}-{}: {} unmatched x {} unmatched features, {} matches", first.index,
+                 second.index, rows_first.size(), rows_second.size(), matches.size());
   if (matches.size() < 8) return 0;
-
   std::vector<TwoViewCorrespondence> rays;
   for (const Match& m : matches) {
     rays.push_back({camera.Unproject(first.features.points[rows_first[m.train]].cast<double>()).head<2>(),
                     camera.Unproject(second.features.points[rows_second[m.query]].cast<double>()).head<2>()});
   }
-  RansacOptions ransac;
-  ransac.inlier_threshold = options_.pnp_threshold_pixels;
-  // The essential matrix only selects consistent matches; triangulation checks depth and angle.
-  const RelativePoseResult rel = EstimateRelativePose(rays, camera.intrinsics().fx, ransac, 1e4);
-  GLAM_LOG_TRACE("keyframe pair {}-{}: {} unmatched x {} unmatched features, {} matches, {} essential inliers",
-                 first.index, second.index, rows_first.size(), rows_second.size(), matches.size(),
-                 rel.num_inliers);
-  if (!rel.success) return 0;
 
   // Triangulated with the two PnP poses (not the essential matrix's relative pose).
   const SE3 poses[2] = {*first.cam_from_submap, *second.cam_from_submap};
@@ -161,7 +197,6 @@ std::size_t SubmapBuilder::TriangulateBetween(std::size_t first_position, std::s
   std::vector<NewPoint> candidates;
   int status_counts[6] = {0, 0, 0, 0, 0, 0};
   for (std::size_t i = 0; i < matches.size(); ++i) {
-    if (!rel.inlier_mask[i]) continue;
     const Eigen::Vector2d obs[2] = {rays[i].x1, rays[i].x2};
     const Triangulation t = Triangulate(poses, obs, tri_options);
     ++status_counts[static_cast<int>(t.status)];
@@ -172,12 +207,22 @@ std::size_t SubmapBuilder::TriangulateBetween(std::size_t first_position, std::s
                  status_counts[0], status_counts[2], status_counts[3], status_counts[4], status_counts[5]);
   if (candidates.empty()) return 0;
 
-  // Duplicate removal: a new landmark whose descriptor matches an existing one is dropped.
+  // Duplicate removal: a new landmark whose descriptor matches an existing one is dropped
+  // (SubmapOptions::duplicate_check_in_view: only the existing landmarks in the first frame's
+  // view are compared).
   std::vector<bool> duplicate(candidates.size(), false);
-  if (!open_.landmarks.empty()) {
+  std::vector<int> existing_rows;
+  for (std::size_t l = 0; l < open_.landmarks.size(); ++l) {
+    Eigen::Vector2d px;
+    if (!options_.duplicate_check_in_view ||
+        (camera.Project(poses[0] * open_.landmarks[l].point_in_submap, &px) && camera.InImage(px))) {
+      existing_rows.push_back(static_cast<int>(l));
+    }
+  }
+  if (!existing_rows.empty()) {
     std::vector<int> candidate_rows;
     for (const NewPoint& c : candidates) candidate_rows.push_back(c.feature_first);
-    const cv::Mat existing = LandmarkDescriptorMatrix(open_.landmarks);
+    const cv::Mat existing = LandmarkDescriptorMatrix(open_.landmarks, existing_rows);
     MatchOptions dup_options;
     dup_options.ratio = static_cast<float>(options_.match_ratio);
     for (const Match& m : MatchDescriptors(first.features.FloatDescriptors(candidate_rows), existing, dup_options)) {

@@ -282,6 +282,10 @@ class SubmapBuilder {
   void AddKeyframe(std::size_t position);
   void ObserveNewLandmarksInEarlierKeyframes(std::size_t first_new);
   std::size_t TriangulateBetween(std::size_t first_position, std::size_t second_position);
+  // The matches (query = row of rows_second, train = row of rows_first) triangulated between
+  // two posed frames (SubmapOptions::epipolar_triangulation_matching).
+  std::vector<Match> MatchForTriangulation(const FrameRecord& first, const std::vector<int>& rows_first,
+                                           const FrameRecord& second, const std::vector<int>& rows_second) const;
   void OptimiseAndFilter();
   void UpdateFocalEstimate();
 

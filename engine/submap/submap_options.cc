@@ -38,6 +38,7 @@ void SubmapOptions::Check() const {
   CheckInRange("SubmapOptions.max_view_angle_deg", max_view_angle_deg, 1.0, 180.0);
   CheckInRange("SubmapOptions.match_radius_fraction", match_radius_fraction, 0.001, 1.0);
   CheckInRange("SubmapOptions.match_ratio", match_ratio, 0.1, 1.0);
+  CheckInRange("SubmapOptions.epipolar_match_ratio", epipolar_match_ratio, 0.1, 1.0);
   CheckGreater("SubmapOptions.pnp_threshold_pixels", pnp_threshold_pixels, 0.0);
   CheckInRange("SubmapOptions.min_triangulation_angle_deg", min_triangulation_angle_deg, 0.0, 45.0);
   CheckInRange("SubmapOptions.max_keyframe_parallax_deg", max_keyframe_parallax_deg, 0.0, 90.0);

@@ -126,6 +126,31 @@ struct SubmapOptions {
   // 0 = off (the paper).
   double min_map_coverage = 0.35;
   double max_new_point_reprojection_pixels = 3.0;
+  // How the middle keyframe and the current frame are matched for triangulation. Both are
+  // posed by PnP, so a feature's match can only lie near its epipolar line: true compares each
+  // feature only with the other frame's features within max_new_point_reprojection_pixels of
+  // that line and in front of both cameras (MatchAlongEpipolarLines,
+  // engine/features/epipolar_matcher.h); false (default) = the paper: global descriptor
+  // matching, then an essential-matrix RANSAC to select the consistent matches. On by
+  // UseCalibration (engine/pipeline/mapping_options.h), off otherwise: the lines are drawn with
+  // the camera model, and while the focal and k1 are still being estimated they miss the true
+  // matches (uncalibrated, on the 23 robustness clips: pitch60 and crf32 fell apart, 6 others
+  // got worse). Calibrated, on the loop benchmark video: 2.2 s of matching and RANSAC -> ~0.2 s,
+  // ATE equal or lower on the four benchmark videos (docs/benchmarks.md).
+  bool epipolar_triangulation_matching = false;
+  // Lowe's ratio among the candidates along an epipolar line (match_ratio is the global one).
+  // The band holds ~1 % of the frame's features, so its second best is usually farther than a
+  // global second best and the same ratio lets more ambiguous matches through: at 0.8, the
+  // compressed benchmark video got 36 % more landmarks but 70 % more with errors > 1 m; at 0.7,
+  // 23 % more landmarks, ATE 0.160 -> 0.146 m (docs/benchmarks.md).
+  double epipolar_match_ratio = 0.7;
+  // Duplicate removal compares a new landmark's descriptor only with the existing landmarks
+  // that project into the first frame of its pair (where a duplicate of it would have to be);
+  // false = with every landmark of the submap (the paper). A 20-keyframe submap of the loop
+  // benchmark video holds ~5000 landmarks, a frame sees about a third of them: the check
+  // (a kd-tree over the compared landmarks, built per keyframe pair) cost 22 ms per pair with
+  // all of them.
+  bool duplicate_check_in_view = true;
   // Look for new landmarks in earlier keyframes too (longer tracks). Off by default: on
   // repetitive texture it adds wrong observations faster than it adds baseline (measured on
   // the synthetic lawnmower clip: map median error 0.29 m -> 0.9 m).

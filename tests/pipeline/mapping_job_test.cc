@@ -138,6 +138,21 @@ TEST(MappingOptions, PaperMethodTurnsTheDeviationsOff) {
   EXPECT_FALSE(paper.alignment.use_shared_frames);
   EXPECT_EQ(paper.alignment.local_window, 0);
   EXPECT_EQ(paper.alignment.max_demotable_submaps, 0);
+  EXPECT_FALSE(paper.submap.duplicate_check_in_view);
+  // Epipolar matching for triangulation comes with a calibration, and the preset takes it
+  // back when applied after it (as `glam map --intrinsics --paper` does).
+  EXPECT_FALSE(defaults.submap.epipolar_triangulation_matching);
+  MappingOptions calibrated;
+  Intrinsics in;
+  in.width = 640;
+  in.height = 360;
+  in.fx = in.fy = 500;
+  in.cx = 319.5;
+  in.cy = 179.5;
+  UseCalibration(&calibrated, in);
+  EXPECT_TRUE(calibrated.submap.epipolar_triangulation_matching);
+  UsePaperMethod(&calibrated);
+  EXPECT_FALSE(calibrated.submap.epipolar_triangulation_matching);
   // The defaults do deviate (else the preset would be a no-op), and the paper's own
   // parameters are untouched.
   EXPECT_NE(defaults.detection_interval, 1);

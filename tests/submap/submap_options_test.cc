@@ -19,6 +19,14 @@ void ExpectRejected(const SubmapOptions& options, const std::string& name) {
 
 TEST(SubmapOptions, DefaultsPass) { EXPECT_NO_THROW(SubmapOptions().Check()); }
 
+TEST(SubmapOptions, RejectsABadEpipolarRatio) {
+  SubmapOptions o;
+  o.epipolar_match_ratio = 0;
+  ExpectRejected(o, "epipolar_match_ratio");
+  o.epipolar_match_ratio = 1.2;
+  ExpectRejected(o, "epipolar_match_ratio");
+}
+
 TEST(SubmapOptions, RejectsBadFocalOptions) {
   SubmapOptions o;
   o.rebuild_focal_change = -0.01;
