@@ -135,8 +135,9 @@ struct SubmapOptions {
   // UseCalibration (engine/pipeline/mapping_options.h), off otherwise: the lines are drawn with
   // the camera model, and while the focal and k1 are still being estimated they miss the true
   // matches (uncalibrated, on the 23 robustness clips: pitch60 and crf32 fell apart, 6 others
-  // got worse). Calibrated, on the loop benchmark video: 2.2 s of matching and RANSAC -> ~0.2 s,
-  // ATE equal or lower on the four benchmark videos (docs/benchmarks.md).
+  // got worse). Calibrated, on the loop benchmark video: 2.2 s of matching and RANSAC -> ~0.2 s;
+  // ATE lower on two of the four benchmark videos, within 0.004 m on the others
+  // (docs/benchmarks.md).
   bool epipolar_triangulation_matching = false;
   // Lowe's ratio among the candidates along an epipolar line (match_ratio is the global one).
   // The band holds ~1 % of the frame's features, so its second best is usually farther than a

@@ -21,31 +21,9 @@
 
 #include "tests/support/clip_runner.h"
 #include "tests/support/submap_accuracy.h"
-#include "tools/eval/ground_truth_surface.h"
 
 namespace glam {
 namespace {
-
-struct Accuracy {
-  double mean_submap_ate = 0;  // mean over submaps of the frame-centre ATE after Sim3 (m)
-  double map_median = 0;       // median landmark distance to the true surface (m)
-  std::size_t submaps = 0;
-};
-
-Accuracy Measure(const test_support::ClipRun& run, const std::vector<TimedPose>& gt,
-                 const eval::HeightfieldSurface& surface) {
-  Accuracy out;
-  std::vector<double> errors;
-  for (const Submap& s : run.submaps) {
-    const test_support::SubmapAccuracy a = test_support::MeasureSubmap(s, gt, surface);
-    out.mean_submap_ate += a.ate;
-    errors.insert(errors.end(), a.point_errors.begin(), a.point_errors.end());
-  }
-  out.submaps = run.submaps.size();
-  if (out.submaps > 0) out.mean_submap_ate /= static_cast<double>(out.submaps);
-  out.map_median = test_support::MedianOf(std::move(errors));
-  return out;
-}
 
 TEST(CompletionRefinement, TrackedFramesInTheFinalBundleAdjustmentImproveTheSubmaps) {
   const test_support::ClipTruth clip =
@@ -55,11 +33,11 @@ TEST(CompletionRefinement, TrackedFramesInTheFinalBundleAdjustmentImproveTheSubm
   options.bundle_adjustment.refine_focal = false;
   options.bundle_adjustment.refine_k1 = false;
   ASSERT_GT(options.completion_ba_max_frames, 0) << "the product default uses the completion BA";
-  const Accuracy refined = Measure(test_support::RunSubmapBuilderOnClip(clip.video, clip.intrinsics, options, 0),
-                                   clip.gt_world_from_cam, clip.surface);
+  const test_support::RunAccuracy refined =
+      test_support::MeasureSubmaps(test_support::RunSubmapBuilderOnClip(clip.video, clip.intrinsics, options, 0).submaps, clip);
   options.completion_ba_max_frames = 0;
-  const Accuracy paper = Measure(test_support::RunSubmapBuilderOnClip(clip.video, clip.intrinsics, options, 0),
-                                 clip.gt_world_from_cam, clip.surface);
+  const test_support::RunAccuracy paper =
+      test_support::MeasureSubmaps(test_support::RunSubmapBuilderOnClip(clip.video, clip.intrinsics, options, 0).submaps, clip);
   std::printf("completion BA: %zu submaps, mean per-submap ATE %.3f m, map median %.3f m\n", refined.submaps,
               refined.mean_submap_ate, refined.map_median);
   std::printf("PnP only:      %zu submaps, mean per-submap ATE %.3f m, map median %.3f m\n", paper.submaps,

@@ -9,32 +9,9 @@
 
 #include "tests/support/clip_runner.h"
 #include "tests/support/submap_accuracy.h"
-#include "tools/eval/ground_truth_surface.h"
 
 namespace glam {
 namespace {
-
-struct Accuracy {
-  double mean_submap_ate = 0;  // mean over submaps of the frame-centre ATE after Sim3 (m)
-  double map_median = 0;       // median landmark distance to the true surface (m)
-  std::size_t submaps = 0;
-  std::size_t landmarks = 0;
-};
-
-Accuracy Measure(const test_support::ClipRun& run, const test_support::ClipTruth& clip) {
-  Accuracy out;
-  std::vector<double> errors;
-  for (const Submap& s : run.submaps) {
-    const test_support::SubmapAccuracy a = test_support::MeasureSubmap(s, clip.gt_world_from_cam, clip.surface);
-    out.mean_submap_ate += a.ate;
-    out.landmarks += s.landmarks.size();
-    errors.insert(errors.end(), a.point_errors.begin(), a.point_errors.end());
-  }
-  out.submaps = run.submaps.size();
-  if (out.submaps > 0) out.mean_submap_ate /= static_cast<double>(out.submaps);
-  out.map_median = test_support::MedianOf(std::move(errors));
-  return out;
-}
 
 TEST(EpipolarTriangulation, MatchesAlongEpipolarLinesMapAsWellAsGlobalMatching) {
   const test_support::ClipTruth clip =
@@ -43,9 +20,11 @@ TEST(EpipolarTriangulation, MatchesAlongEpipolarLinesMapAsWellAsGlobalMatching) 
   options.bundle_adjustment.refine_focal = false;
   options.bundle_adjustment.refine_k1 = false;
   options.epipolar_triangulation_matching = true;
-  const Accuracy epipolar = Measure(test_support::RunSubmapBuilderOnClip(clip.video, clip.intrinsics, options, 0), clip);
+  const test_support::RunAccuracy epipolar =
+      test_support::MeasureSubmaps(test_support::RunSubmapBuilderOnClip(clip.video, clip.intrinsics, options, 0).submaps, clip);
   options.epipolar_triangulation_matching = false;
-  const Accuracy global = Measure(test_support::RunSubmapBuilderOnClip(clip.video, clip.intrinsics, options, 0), clip);
+  const test_support::RunAccuracy global =
+      test_support::MeasureSubmaps(test_support::RunSubmapBuilderOnClip(clip.video, clip.intrinsics, options, 0).submaps, clip);
   std::printf("epipolar: %zu submaps, %zu landmarks, mean per-submap ATE %.3f m, map median %.3f m\n",
               epipolar.submaps, epipolar.landmarks, epipolar.mean_submap_ate, epipolar.map_median);
   std::printf("global:   %zu submaps, %zu landmarks, mean per-submap ATE %.3f m, map median %.3f m\n",

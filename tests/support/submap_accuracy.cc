@@ -38,4 +38,19 @@ double MedianOf(std::vector<double> values) {
   return *mid;
 }
 
+RunAccuracy MeasureSubmaps(const std::vector<Submap>& submaps, const ClipTruth& clip) {
+  RunAccuracy out;
+  std::vector<double> errors;
+  for (const Submap& submap : submaps) {
+    const SubmapAccuracy a = MeasureSubmap(submap, clip.gt_world_from_cam, clip.surface);
+    out.mean_submap_ate += a.ate;
+    out.landmarks += submap.landmarks.size();
+    errors.insert(errors.end(), a.point_errors.begin(), a.point_errors.end());
+  }
+  out.submaps = submaps.size();
+  if (out.submaps > 0) out.mean_submap_ate /= static_cast<double>(out.submaps);
+  out.map_median = MedianOf(std::move(errors));
+  return out;
+}
+
 }  // namespace glam::test_support

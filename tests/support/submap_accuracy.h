@@ -37,4 +37,13 @@ SubmapAccuracy MeasureSubmap(const Submap& submap, const std::vector<TimedPose>&
 // Median of the values (copied); 0 for none.
 double MedianOf(std::vector<double> values);
 
+// Over all submaps of a run: the mean of their ATEs, the median of all their landmarks' errors.
+struct RunAccuracy {
+  double mean_submap_ate = 0;  // mean over submaps of MeasureSubmap's ate (m)
+  double map_median = 0;       // median landmark distance to the true surface (m)
+  std::size_t submaps = 0;
+  std::size_t landmarks = 0;
+};
+RunAccuracy MeasureSubmaps(const std::vector<Submap>& submaps, const ClipTruth& clip);
+
 }  // namespace glam::test_support
