@@ -47,7 +47,6 @@ std::vector<Match> MatchAlongEpipolarLines(const cv::Mat& query_descriptors,
   // Per train feature: the closest query among the pairs compared (for the mutual check).
   std::vector<float> train_best(train_normalised.size(), std::numeric_limits<float>::infinity());
   std::vector<int> train_best_query(train_normalised.size(), -1);
-  std::vector<float> candidate_distance;
   for (int q = 0; q < query_descriptors.rows; ++q) {
     const Eigen::Vector3d ray(query_normalised[static_cast<std::size_t>(q)].x(),
                               query_normalised[static_cast<std::size_t>(q)].y(), 1.0);
