@@ -110,27 +110,21 @@ void SubmapBuilder::ObserveNewLandmarksInEarlierKeyframes(std::size_t first_new)
 }
 
 std::vector<Match> SubmapBuilder::MatchForTriangulation(const FrameRecord& first, const std::vector<int>& rows_first,
-                                                       const FrameRecord& second,
-                                                       const std::vector<int>& rows_second) const {
+                                                       const std::vector<Eigen::Vector2d>& first_rays,
+                                                       const FrameRecord& second, const std::vector<int>& rows_second,
+                                                       const std::vector<Eigen::Vector2d>& second_rays) const {
   // Query = the second frame's unmatched features, train = the first frame's.
   const Camera camera = CurrentCamera();
   const cv::Mat first_descriptors = first.features.FloatDescriptors(rows_first);
   const cv::Mat second_descriptors = second.features.FloatDescriptors(rows_second);
-  const auto normalised = [&](const FrameRecord& frame, const std::vector<int>& rows) {
-    std::vector<Eigen::Vector2d> out;
-    out.reserve(rows.size());
-    for (int r : rows) out.push_back(camera.Unproject(frame.features.points[r].cast<double>()).head<2>());
-    return out;
-  };
   if (options_.epipolar_triangulation_matching) {
     EpipolarMatchOptions epipolar;
     epipolar.max_line_distance_px = options_.max_new_point_reprojection_pixels;
     epipolar.ratio = static_cast<float>(options_.epipolar_match_ratio);
     epipolar.mutual = true;
     const SE3 cam_first_from_cam_second = *first.cam_from_submap * second.cam_from_submap->Inverse();
-    return MatchAlongEpipolarLines(second_descriptors, normalised(second, rows_second), first_descriptors,
-                                   normalised(first, rows_first), cam_first_from_cam_second,
-                                   camera.intrinsics().fx, epipolar);
+    return MatchAlongEpipolarLines(second_descriptors, second_rays, first_descriptors, first_rays,
+                                   cam_first_from_cam_second, camera.intrinsics().fx, epipolar);
   }
   // The paper: global matching, then the essential matrix's RANSAC selects consistent matches.
   MatchOptions match_options;
@@ -138,8 +132,6 @@ std::vector<Match> SubmapBuilder::MatchForTriangulation(const FrameRecord& first
   match_options.mutual = true;
   const std::vector<Match> matches = MatchDescriptors(second_descriptors, first_descriptors, match_options);
   if (matches.size() < 8) return {};
-  const std::vector<Eigen::Vector2d> first_rays = normalised(first, rows_first);
-  const std::vector<Eigen::Vector2d> second_rays = normalised(second, rows_second);
   std::vector<TwoViewCorrespondence> rays;
   for (const Match& m : matches) rays.push_back({first_rays[m.train], second_rays[m.query]});
   RansacOptions ransac;
@@ -172,15 +164,21 @@ std::size_t SubmapBuilder::TriangulateBetween(std::size_t first_position, std::s
     if (!used_second.count(i)) rows_second.push_back(i);
   if (rows_first.size() < 8 || rows_second.size() < 8) return 0;
 
-  const std::vector<Match> matches = MatchForTriangulation(first, rows_first, second, rows_second);
+  // Normalised image coordinates of the unmatched features, for matching and triangulation.
+  const auto normalised = [&](const FrameRecord& frame, const std::vector<int>& rows) {
+    std::vector<Eigen::Vector2d> out;
+    out.reserve(rows.size());
+    for (int r : rows) out.push_back(camera.Unproject(frame.features.points[r].cast<double>()).head<2>());
+    return out;
+  };
+  const std::vector<Eigen::Vector2d> first_rays = normalised(first, rows_first);
+  const std::vector<Eigen::Vector2d> second_rays = normalised(second, rows_second);
+  const std::vector<Match> matches = MatchForTriangulation(first, rows_first, first_rays, second, rows_second, second_rays);
   GLAM_LOG_TRACE("keyframe pair {}-{}: {} unmatched x {} unmatched features, {} matches", first.index,
                  second.index, rows_first.size(), rows_second.size(), matches.size());
   if (matches.size() < 8) return 0;
   std::vector<TwoViewCorrespondence> rays;
-  for (const Match& m : matches) {
-    rays.push_back({camera.Unproject(first.features.points[rows_first[m.train]].cast<double>()).head<2>(),
-                    camera.Unproject(second.features.points[rows_second[m.query]].cast<double>()).head<2>()});
-  }
+  for (const Match& m : matches) rays.push_back({first_rays[m.train], second_rays[m.query]});
 
   // Triangulated with the two PnP poses (not the essential matrix's relative pose).
   const SE3 poses[2] = {*first.cam_from_submap, *second.cam_from_submap};

@@ -283,9 +283,12 @@ class SubmapBuilder {
   void ObserveNewLandmarksInEarlierKeyframes(std::size_t first_new);
   std::size_t TriangulateBetween(std::size_t first_position, std::size_t second_position);
   // The matches (query = row of rows_second, train = row of rows_first) triangulated between
-  // two posed frames (SubmapOptions::epipolar_triangulation_matching).
+  // two posed frames (SubmapOptions::epipolar_triangulation_matching); *_rays: those rows'
+  // normalised image coordinates.
   std::vector<Match> MatchForTriangulation(const FrameRecord& first, const std::vector<int>& rows_first,
-                                           const FrameRecord& second, const std::vector<int>& rows_second) const;
+                                           const std::vector<Eigen::Vector2d>& first_rays, const FrameRecord& second,
+                                           const std::vector<int>& rows_second,
+                                           const std::vector<Eigen::Vector2d>& second_rays) const;
   void OptimiseAndFilter();
   void UpdateFocalEstimate();
 
