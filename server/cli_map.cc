@@ -1,9 +1,11 @@
-// `glam map INPUT --out DIR [...]`: offline mapping of a video file or image folder. Draws a
+// `glam map INPUT --out DIR [...]`: mapping of a video file, image folder or live stream. Draws a
 // progress bar on stderr when stderr is a terminal (log lines otherwise, e.g. in CI), and
 // turns Ctrl-C into a cooperative cancel so that threads are joined and no half-written file
-// is left behind by a killed process.
+// is left behind by a killed process (on a live stream the first Ctrl-C ends the input instead,
+// and the map of what arrived is finished).
 #include <unistd.h>
 
+#include <atomic>
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
@@ -11,6 +13,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <fmt/format.h>
 
@@ -19,6 +22,7 @@
 #include "engine/core/intrinsics_io.h"
 #include "engine/core/logging.h"
 #include "engine/pipeline/mapping_job.h"
+#include "engine/video/frame_source.h"
 #include "server/commands.h"
 
 namespace glam::cli {
@@ -37,6 +41,8 @@ struct MapArgs {
   bool no_gps = false;
   bool max_features_given = false;  // --max-features on the command line
   std::string rolling_shutter = "auto";  // --rolling-shutter-ms: milliseconds or "auto"
+  std::string stream_drop = "auto";       // --stream-drop: auto, yes, no
+  std::vector<std::string> stream_options;  // --stream-option KEY=VALUE (parsed by its callback)
   bool paper = false;
   MappingOptions options;
 };
@@ -46,7 +52,27 @@ CancellationToken& InterruptToken() {
   return token;
 }
 
-extern "C" void OnInterrupt(int) { InterruptToken().Cancel(); }
+// Ends a live stream input (FrameSourceOptions::end_stream): the map of what arrived is finished.
+CancellationToken& EndStreamToken() {
+  static CancellationToken token;
+  return token;
+}
+
+// A live stream has no end of its own, so the first Ctrl-C ends the input and the map is
+// finished and written; a second one (or any Ctrl-C on a file) cancels.
+std::atomic<bool> g_input_is_stream{false};
+
+extern "C" void OnInterrupt(int) {
+  if (g_input_is_stream.load() && !EndStreamToken().IsCancelled()) {
+    EndStreamToken().Cancel();
+    static const char kMessage[] =
+        "\nglam map: ending the stream; finishing the map of what arrived (Ctrl-C again to abort)\n";
+    const ssize_t written = write(STDERR_FILENO, kMessage, sizeof(kMessage) - 1);
+    (void)written;
+    return;
+  }
+  InterruptToken().Cancel();
+}
 
 std::string FormatDuration(double seconds) {
   if (seconds < 0) return "--:--";
@@ -88,10 +114,18 @@ void RunMap(MapArgs& args) {
   if (!args.vocabulary_path.empty()) args.options.vocabulary = args.vocabulary_path;
   if (!args.gps_path.empty()) args.options.gps_track = args.gps_path;
   if (args.no_gps) args.options.find_gps = false;
+  using StreamDrop = FrameSourceOptions::StreamDrop;
+  args.options.source.stream_drop = args.stream_drop == "yes"  ? StreamDrop::kDrop
+                                    : args.stream_drop == "no" ? StreamDrop::kWait
+                                                               : StreamDrop::kAuto;
+  const bool stream = IsStreamInput(args.input);
+  args.options.source.allow_streams = true;  // the user named the input
+  args.options.source.end_stream = EndStreamToken();
   args.options.Check();
-  if (!std::filesystem::exists(args.input)) {
+  if (!stream && !std::filesystem::exists(args.input)) {
     throw InputError(fmt::format("input {} does not exist", args.input));
   }
+  g_input_is_stream.store(stream);
   if (std::filesystem::is_directory(args.input) && !args.max_features_given) {
     args.options.sift.max_features = kPhotoFolderMaxFeatures;
     GLAM_LOG_INFO("image folder: {} SIFT features per photo (--max-features to change)",
@@ -142,7 +176,12 @@ void RegisterMapCommand(CLI::App& app) {
       "map", "Build submaps, align them (loop closure) and write trajectory.tum, points.ply, "
              "report.json and graph.json from a video or image folder (parts of the flight that "
              "cannot be linked to the map: parts/<n>/trajectory.tum and points.ply)");
-  cmd->add_option("input", args->input, "Video file (anything FFmpeg decodes: MP4/MOV/MKV/TS/AVI, H.264/H.265/VP9/AV1/ProRes) or folder of images")->required();
+  cmd->add_option("input", args->input,
+                  "Video file (anything FFmpeg decodes: MP4/MOV/MKV/TS/AVI, H.264/H.265/VP9/AV1/ProRes), "
+                  "folder of images, or a live stream: an rtsp://, rtmp://, srt://, udp://, rtp://, "
+                  "tcp:// or http(s):// URL, or - for standard input (Ctrl-C ends a stream and "
+                  "finishes the map)")
+      ->required();
   cmd->add_option("--out", args->out, "Output directory")->required();
   cmd->add_option("--intrinsics", args->intrinsics_path,
                   "intrinsics.json at the input's original resolution (a calibration: its focal is "
@@ -164,6 +203,32 @@ void RegisterMapCommand(CLI::App& app) {
                   "Downscale frames to this long side (px); 0 = never")
       ->capture_default_str();
   cmd->add_option("--stride", args->options.source.stride, "Use every N-th frame")->capture_default_str();
+  cmd->add_option("--stream-buffer", args->options.source.stream_buffer_s,
+                  "Live streams: seconds of frames decoded ahead of mapping")
+      ->capture_default_str();
+  cmd->add_option("--stream-drop", args->stream_drop,
+                  "Live streams: when mapping falls behind and the buffer is full, drop the oldest "
+                  "buffered frame (yes) or stop reading until there is room (no); auto = yes for "
+                  "rtsp, rtmp, srt, udp and rtp, whose senders do not wait")
+      ->check(CLI::IsMember({"auto", "yes", "no"}))
+      ->capture_default_str();
+  cmd->add_option("--stream-open-timeout", args->options.source.stream_open_timeout_s,
+                  "Live streams: seconds to wait for the stream to open (a listening URL such as "
+                  "tcp://0.0.0.0:5000?listen=1: for the sender to connect)")
+      ->capture_default_str();
+  cmd->add_option("--stream-timeout", args->options.source.stream_stall_timeout_s,
+                  "Live streams: seconds without a frame after which the stream counts as ended")
+      ->capture_default_str();
+  cmd->add_option("--stream-option", args->stream_options,
+                  "Live streams: an FFmpeg protocol or demuxer option KEY=VALUE (repeatable), e.g. "
+                  "rtsp_transport=udp (rtsp:// uses tcp by default) or listen=1")
+      ->each([args](const std::string& text) {
+        const std::size_t eq = text.find('=');
+        if (eq == 0 || eq == std::string::npos) {
+          throw CLI::ValidationError("--stream-option", "expected KEY=VALUE, got '" + text + "'");
+        }
+        args->options.source.stream_options.emplace_back(text.substr(0, eq), text.substr(eq + 1));
+      });
   cmd->add_flag_callback(
       "--name-order", [args] { args->options.source.photos_by_capture_time = false; },
       "Photo folders: map the photos in name order; by default photos with an EXIF capture time are "

@@ -35,6 +35,7 @@
 #include "engine/submap/submap_builder.h"
 #include "engine/video/frame_source.h"
 #include "engine/video/image_folder_source.h"
+#include "engine/video/stream_source.h"
 
 namespace glam {
 namespace {
@@ -176,6 +177,9 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
 
   MappingReport report;
   report.input = input.string();
+  // A live stream has no frame count and cannot seek: it is never resumed, and has no sidecar.
+  const bool stream = dynamic_cast<const StreamSource*>(source.get()) != nullptr;
+  report.input_is_stream = stream;
   if (const auto* folder = dynamic_cast<const ImageFolderSource*>(source.get())) {
     report.photos_reordered_by_time = static_cast<std::int64_t>(folder->photos_reordered_by_time());
   }
@@ -200,7 +204,7 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
       report.gps_track = "EXIF GPS of the photos";
       gps = std::move(exif);
     }
-  } else if (options.find_gps) {
+  } else if (options.find_gps && !stream) {
     if (const std::optional<std::filesystem::path> sidecar = FindGpsSidecar(input)) {
       report.gps_track = sidecar->string();
       try {
@@ -216,7 +220,7 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   }
   if (gps) GLAM_LOG_INFO("GPS track {}: {} positions", report.gps_track, gps->size());
   const std::optional<ResumeCheckpoint> resume =
-      options.resume ? UsableCheckpoint(out_dir, report) : std::nullopt;
+      options.resume && !stream ? UsableCheckpoint(out_dir, report) : std::nullopt;
   if (resume) {
     intrinsics.fx = intrinsics.fy = resume->focal;
     intrinsics.SetK1(resume->k1);
@@ -451,6 +455,7 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   report.k1_held = stats.k1_held;
   report.k1_profile_rms_increase = stats.k1_profile_rms_increase;
   report.input_ended_early = source->ended_early();
+  report.frames_dropped = source->frames_dropped();
   report.timings.decode_and_features_s = worker.busy_seconds();
   report.timings.builder_s = builder_seconds;
   report.timings.bundle_adjust_s = stats.bundle_adjust_seconds;

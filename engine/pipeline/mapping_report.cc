@@ -115,6 +115,13 @@ std::vector<std::string> Diagnose(const MappingReport& r, int min_features) {
         "truncated or corrupt; only the frames before the damage were mapped",
         r.frames_decoded, r.frames_total));
   }
+  if (r.frames_dropped > 0) {
+    warnings.push_back(fmt::format(
+        "{} frames of the live stream were dropped because mapping was slower than the stream "
+        "({} mapped): lower --max-image-size or the stream's frame rate, or record the flight and map "
+        "the file",
+        r.frames_dropped, r.frames_decoded));
+  }
   if (r.frames_without_features == r.frames_decoded) {
     warnings.push_back(fmt::format(
         "no features in any of the {} frames (fewer than {} each): the video is black, uniform "
@@ -264,6 +271,8 @@ nlohmann::json MappingReport::ToJson() const {
           {"processing_fps", processing_fps},
           {"processing_size", {processing_width, processing_height}},
           {"input_ended_early", input_ended_early},
+          {"input_is_stream", input_is_stream},
+          {"frames_dropped", frames_dropped},
           {"photos_reordered_by_time", photos_reordered_by_time},
           {"georeference", GeoreferenceJson(gps_track, georeference, georeferenced_parts)},
           {"warnings", warnings},

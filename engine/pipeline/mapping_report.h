@@ -100,6 +100,10 @@ struct MappingReport {
   int processing_width = 0;
   int processing_height = 0;
   bool input_ended_early = false;
+  // Live streams (engine/video/stream_source.h): whether the input was one, and the frames it
+  // dropped because mapping fell behind (0 for files and folders).
+  bool input_is_stream = false;
+  std::int64_t frames_dropped = 0;
   // Photo folders: how many photos their EXIF capture time put somewhere else than their place
   // in name order (ImageFolderSource; 0: name order, and always 0 for a video).
   std::int64_t photos_reordered_by_time = 0;

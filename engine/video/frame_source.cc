@@ -1,6 +1,7 @@
 #include "engine/video/frame_source.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 
 #include <opencv2/imgproc.hpp>
@@ -8,6 +9,7 @@
 #include "engine/core/error.h"
 #include "engine/core/options.h"
 #include "engine/video/image_folder_source.h"
+#include "engine/video/stream_source.h"
 #include "engine/video/video_file_source.h"
 
 namespace glam {
@@ -15,6 +17,25 @@ namespace glam {
 void FrameSourceOptions::Check() const {
   if (max_image_size != 0) CheckGreaterEqual("FrameSourceOptions.max_image_size", max_image_size, 16);
   CheckGreaterEqual("FrameSourceOptions.stride", stride, 1);
+  CheckInRange("FrameSourceOptions.stream_buffer_s", stream_buffer_s, 0.0, 600.0);
+  CheckInRange("FrameSourceOptions.stream_open_timeout_s", stream_open_timeout_s, 0.01, 86400.0);
+  CheckInRange("FrameSourceOptions.stream_stall_timeout_s", stream_stall_timeout_s, 0.01, 86400.0);
+  for (const auto& [key, value] : stream_options) {
+    if (key.empty()) throw InputError("FrameSourceOptions.stream_options: an option without a name");
+  }
+}
+
+bool IsStreamInput(const std::string& input) {
+  if (input == "-") return true;
+  if (input.rfind("pipe:", 0) == 0) return true;
+  const std::size_t colon = input.find("://");
+  if (colon == std::string::npos) return false;
+  std::string scheme = input.substr(0, colon);
+  for (char& c : scheme) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  for (const char* known : {"rtsp", "rtsps", "rtmp", "rtmps", "srt", "udp", "rtp", "tcp", "http", "https"}) {
+    if (scheme == known) return true;
+  }
+  return false;
 }
 
 cv::Size ProcessingSize(cv::Size original, int max_image_size) {
@@ -35,6 +56,9 @@ cv::Mat ToProcessingSize(const cv::Mat& image, cv::Size processing_size) {
 std::unique_ptr<FrameSource> OpenFrameSource(const std::filesystem::path& path,
                                              const FrameSourceOptions& options) {
   options.Check();
+  if (options.allow_streams && IsStreamInput(path.string())) {
+    return std::make_unique<StreamSource>(path.string(), options);
+  }
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) {
     throw InputError(fmt::format("input '{}' does not exist", path.string()));

@@ -1,5 +1,5 @@
 // Where frames come from. The submap builder only ever sees this interface, so a video file,
-// a folder of photos (and later a live stream) are interchangeable. Frames are delivered at
+// a folder of photos and a live stream (stream_source.h) are interchangeable. Frames are delivered at
 // *processing* size: anything larger than FrameSourceOptions::max_image_size on its long side
 // is downscaled once here, so 4K footage costs what 720p costs downstream, and every later
 // stage works in one pixel unit (processing pixels). The original size travels along so that
@@ -14,8 +14,12 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <opencv2/core.hpp>
+
+#include "engine/core/cancellation.h"
 
 namespace glam {
 
@@ -47,6 +51,31 @@ struct FrameSourceOptions {
   // (image_folder_source.h).
   bool photos_by_capture_time = true;
 
+  // Live streams (stream_source.h). An input is only opened as a stream URL (rtsp://, srt://,
+  // udp://, tcp://, http://, "-" for standard input, ...) when this is true: a program that
+  // passes paths it did not choose itself (the server) must never make FFmpeg open a URL.
+  bool allow_streams = false;
+  // Frames decoded ahead of mapping, in seconds of stream (at least 2 frames).
+  double stream_buffer_s = 1.0;
+  // What happens when mapping falls behind a stream and the buffer is full: kDrop discards the
+  // oldest buffered frame (a live sender does not wait: unread network data is lost, or the
+  // sender drops the connection), kWait stops reading until there is room (a pipe or a file
+  // served over HTTP just waits). kAuto: kDrop for the protocols that carry live video
+  // (rtsp, rtmp, srt, udp, rtp), kWait for the others.
+  enum class StreamDrop { kAuto, kDrop, kWait };
+  StreamDrop stream_drop = StreamDrop::kAuto;
+  // Seconds to wait for a stream to open (a listening socket: for the sender to connect).
+  double stream_open_timeout_s = 60.0;
+  // Seconds without a new frame after which a stream counts as ended.
+  double stream_stall_timeout_s = 10.0;
+  // FFmpeg demuxer / protocol options for stream inputs (VideoDecoderOptions::format_options);
+  // rtsp:// gets rtsp_transport=tcp unless given here.
+  std::vector<std::pair<std::string, std::string>> stream_options;
+  // Cancelled: a stream input ends as if the sender had stopped (frames already buffered are
+  // still delivered), so the map of what was received is finished and written. How a user
+  // stops mapping a live feed (glam map: the first Ctrl-C).
+  CancellationToken end_stream;
+
   void Check() const;  // throws InputError
 };
 
@@ -70,9 +99,19 @@ class FrameSource {
 
   // True once the input ended before info().frame_count frames were seen (truncated video).
   virtual bool ended_early() const = 0;
+
+  // Frames decoded but discarded because mapping fell behind a live stream (stream_source.h);
+  // 0 for files and folders, which wait for the reader.
+  virtual int64_t frames_dropped() const { return 0; }
 };
 
-// Opens a directory as ImageFolderSource, anything else as VideoFileSource.
+// True when `input` names a stream for FFmpeg rather than a file or folder: a URL with a
+// network protocol FFmpeg reads (rtsp, rtsps, rtmp, rtmps, srt, udp, rtp, tcp, http, https),
+// "pipe:N", or "-" (standard input).
+bool IsStreamInput(const std::string& input);
+
+// Opens a directory as ImageFolderSource, a stream URL (IsStreamInput, when
+// options.allow_streams) as StreamSource, anything else as VideoFileSource.
 // Throws InputError for missing / unreadable / empty input, with a message naming the path.
 std::unique_ptr<FrameSource> OpenFrameSource(const std::filesystem::path& path,
                                              const FrameSourceOptions& options = {});

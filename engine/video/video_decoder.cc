@@ -97,6 +97,8 @@ void VideoDecoderOptions::Check() const {
 struct VideoDecoder::Impl {
   std::filesystem::path path;
   int threads = 0;
+  std::vector<std::pair<std::string, std::string>> format_options;
+  std::function<bool()> interrupt;
   std::unique_ptr<AVFormatContext, FormatDeleter> format;
   std::unique_ptr<AVCodecContext, CodecDeleter> codec;
   std::unique_ptr<AVFrame, FrameDeleter> frame{av_frame_alloc()};
@@ -113,6 +115,10 @@ struct VideoDecoder::Impl {
 
   // Opens (or opens again, at the start) the file and its decoder. Throws InputError.
   void Open();
+  static int InterruptTrampoline(void* opaque) {
+    const Impl* self = static_cast<const Impl*>(opaque);
+    return self->interrupt && self->interrupt() ? 1 : 0;
+  }
   // Decodes the next frame into `frame`; false at the end of the stream.
   bool DecodeFrame();
   int64_t FrameTimestamp() const;
@@ -190,8 +196,22 @@ void VideoDecoder::Impl::Open() {
   draining = false;
   pending = false;
 
-  AVFormatContext* raw_format = nullptr;
-  const int opened = avformat_open_input(&raw_format, path.c_str(), nullptr, nullptr);
+  AVFormatContext* raw_format = avformat_alloc_context();
+  if (raw_format == nullptr) throw EnvironmentError("out of memory allocating a video demuxer");
+  if (interrupt) {
+    raw_format->interrupt_callback.callback = &InterruptTrampoline;
+    raw_format->interrupt_callback.opaque = this;
+  }
+  AVDictionary* dictionary = nullptr;
+  for (const auto& [key, value] : format_options) av_dict_set(&dictionary, key.c_str(), value.c_str(), 0);
+  // On failure avformat_open_input frees the context.
+  const int opened = avformat_open_input(&raw_format, path.c_str(), nullptr, &dictionary);
+  const AVDictionaryEntry* unused = nullptr;
+  while ((unused = av_dict_get(dictionary, "", unused, AV_DICT_IGNORE_SUFFIX)) != nullptr) {
+    GLAM_LOG_WARN("'{}': FFmpeg option {}={} not recognised; ignored", path.string(), unused->key,
+                  unused->value);
+  }
+  av_dict_free(&dictionary);
   if (opened < 0) {
     throw InputError(fmt::format("cannot open '{}' as a video ({}): not a video file, or a "
                                  "container FFmpeg cannot read",
@@ -249,6 +269,8 @@ VideoDecoder::VideoDecoder(const std::filesystem::path& path, const VideoDecoder
   Impl& d = *impl_;
   d.path = path;
   d.threads = options.threads;
+  d.format_options = options.format_options;
+  d.interrupt = options.interrupt;
   if (!d.frame || !d.packet) throw EnvironmentError("out of memory allocating a video frame");
   d.Open();
 }

@@ -21,7 +21,11 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <memory>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -33,13 +37,20 @@ struct VideoDecoderOptions {
   // as with libavcodec's three (24.6 s against 24.2-29.5 s) and held ~100 MB fewer 4K frames;
   // one thread was slower (25.3-27.4 s). The SIFT helpers need the cores too.
   int threads = 2;
+  // Options for FFmpeg's demuxer and protocol (avformat_open_input), e.g. {"rtsp_transport",
+  // "tcp"} or {"listen", "1"}; an option FFmpeg does not know is logged and ignored.
+  std::vector<std::pair<std::string, std::string>> format_options;
+  // Polled by FFmpeg while it blocks on I/O (opening, reading a network stream); returning true
+  // aborts the wait, and the stream then ends as if the input had ended. Empty: never.
+  // Network streams need it: a sender that goes silent would otherwise block a read forever.
+  std::function<bool()> interrupt;
 
   void Check() const;  // throws InputError
 };
 
 class VideoDecoder {
  public:
-  // Opens the file and its best video stream. Throws InputError when the file is not a
+  // Opens the file (or FFmpeg URL: rtsp://, udp://, pipe:0, ...) and its best video stream. Throws InputError when the file is not a
   // container FFmpeg can read, has no video stream, or its codec has no decoder here.
   VideoDecoder(const std::filesystem::path& path, const VideoDecoderOptions& options = {});
   ~VideoDecoder();

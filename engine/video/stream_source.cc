@@ -1,0 +1,231 @@
+#include "engine/video/stream_source.h"
+
+#include <fcntl.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdlib>
+
+#include "engine/core/error.h"
+#include "engine/core/logging.h"
+#include "engine/core/thread_name.h"
+
+namespace glam {
+namespace {
+
+std::string Scheme(const std::string& input) {
+  const std::size_t colon = input.find("://");
+  std::string scheme = colon == std::string::npos ? std::string() : input.substr(0, colon);
+  for (char& c : scheme) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return scheme;
+}
+
+bool HasOption(const std::vector<std::pair<std::string, std::string>>& options, const std::string& key) {
+  return std::any_of(options.begin(), options.end(), [&](const auto& o) { return o.first == key; });
+}
+
+// The descriptor FFmpeg's pipe protocol reads for `url` ("pipe:N", "pipe:" = 0), or -1.
+int PipeDescriptor(const std::string& url) {
+  if (url.rfind("pipe:", 0) != 0) return -1;
+  const std::string number = url.substr(5);
+  if (number.empty()) return 0;
+  char* end = nullptr;
+  const long fd = std::strtol(number.c_str(), &end, 10);
+  return end != nullptr && *end == '\0' && fd >= 0 ? static_cast<int>(fd) : -1;
+}
+
+}  // namespace
+
+std::string StreamUrl(const std::string& input) { return input == "-" ? "pipe:0" : input; }
+
+bool StreamDropsFrames(const std::string& input, FrameSourceOptions::StreamDrop policy) {
+  if (policy != FrameSourceOptions::StreamDrop::kAuto) return policy == FrameSourceOptions::StreamDrop::kDrop;
+  const std::string scheme = Scheme(input);
+  for (const char* live : {"rtsp", "rtsps", "rtmp", "rtmps", "srt", "udp", "rtp"}) {
+    if (scheme == live) return true;
+  }
+  return false;
+}
+
+StreamSource::StreamSource(const std::string& input, const FrameSourceOptions& options)
+    : input_(input), options_(options) {
+  options_.Check();
+  drop_ = StreamDropsFrames(input, options_.stream_drop);
+
+  VideoDecoderOptions decoder_options;
+  decoder_options.format_options = options_.stream_options;
+  // RTSP over UDP loses packets on any busy link, and a lost packet damages a whole frame.
+  if ((Scheme(input) == "rtsp" || Scheme(input) == "rtsps") &&
+      !HasOption(decoder_options.format_options, "rtsp_transport")) {
+    decoder_options.format_options.emplace_back("rtsp_transport", "tcp");
+  }
+  decoder_options.interrupt = [this] { return ShouldInterrupt(); };
+  // FFmpeg's pipe protocol blocks in read(2), where no interrupt reaches it (an idle pipe would
+  // hold the reader, and the job, forever); non-blocking, its reads poll the interrupt every
+  // millisecond. The flags are restored when the source closes (stdin may be shared).
+  if (const int fd = PipeDescriptor(StreamUrl(input_)); fd >= 0) {
+    const int flags = fcntl(fd, F_GETFL);
+    if (flags < 0 || fcntl(fd, F_SETFL, flags | O_NONBLOCK) < 0) {
+      throw InputError(fmt::format("stream '{}': descriptor {} is not open", input_, fd));
+    }
+    pipe_.fd = fd;
+    pipe_.flags = flags;
+  }
+  wait_start_.store(Clock::now().time_since_epoch().count());
+  GLAM_LOG_INFO("opening stream '{}' (waiting up to {:.3g} s)", input_, options_.stream_open_timeout_s);
+  try {
+    decoder_ = std::make_unique<VideoDecoder>(StreamUrl(input_), decoder_options);
+  } catch (const InputError& e) {
+    if (options_.end_stream.IsCancelled()) {
+      throw InputError(fmt::format("stream '{}' was ended before it opened", input_));
+    }
+    throw InputError(fmt::format("cannot open stream '{}': {} (nothing within {:.3g} s, or not a "
+                                 "video stream FFmpeg can read)",
+                                 input_, e.what(), options_.stream_open_timeout_s));
+  }
+  if (!decoder_->Grab()) {
+    throw InputError(fmt::format("stream '{}' delivered no decodable frame within {:.3g} s", input_,
+                                 options_.stream_open_timeout_s));
+  }
+  opened_.store(true);
+
+  info_.fps = decoder_->fps();
+  if (!(info_.fps > 0.0) || !std::isfinite(info_.fps) || info_.fps > 1000.0) {
+    GLAM_LOG_WARN("stream '{}' reports no usable frame rate ({}); assuming 30 fps", input_, info_.fps);
+    info_.fps = 30.0;
+  }
+  info_.frame_count = -1;
+  info_.original_size = decoder_->display_size();
+  info_.processing_size = ProcessingSize(info_.original_size, options_.max_image_size);
+  info_.scale = static_cast<double>(info_.processing_size.width) / info_.original_size.width;
+  capacity_ = static_cast<std::size_t>(std::max(2.0, std::round(options_.stream_buffer_s * info_.fps)));
+
+  Frame first;
+  first.index = decoder_->index();
+  first.timestamp_s = static_cast<double>(first.index) / info_.fps;
+  first.original_size = info_.original_size;
+  decoder_->Retrieve(info_.processing_size, &first.bgr);  // a format we cannot convert fails here
+  buffer_.push_back(std::move(first));
+  GLAM_LOG_INFO("stream '{}': {}x{} @ {:.3f} fps, processing {}x{}; buffer {} frames, {} when mapping "
+                "falls behind",
+                input_, info_.original_size.width, info_.original_size.height, info_.fps,
+                info_.processing_size.width, info_.processing_size.height, capacity_,
+                drop_ ? "frames are dropped" : "reading waits");
+  reader_ = std::thread([this] {
+    NameCurrentThread("glam-stream");
+    ReadLoop();
+  });
+}
+
+StreamSource::~StreamSource() {
+  closing_.store(true);
+  changed_.notify_all();
+  if (reader_.joinable()) reader_.join();
+}
+
+StreamSource::NonBlockingPipe::~NonBlockingPipe() {
+  if (fd >= 0 && flags >= 0) fcntl(fd, F_SETFL, flags);
+}
+
+bool StreamSource::ShouldInterrupt() const {
+  if (closing_.load() || options_.end_stream.IsCancelled()) return true;
+  const double limit = opened_.load() ? options_.stream_stall_timeout_s : options_.stream_open_timeout_s;
+  const Clock::duration waited = Clock::now().time_since_epoch() - Clock::duration(wait_start_.load());
+  if (std::chrono::duration<double>(waited).count() <= limit) return false;
+  timed_out_.store(true);
+  return true;
+}
+
+bool StreamSource::Push(Frame frame) {
+  std::unique_lock<std::mutex> lock(mutex_);
+  if (buffer_.size() >= capacity_) {
+    if (drop_) {
+      if (dropped_ == 0) {
+        GLAM_LOG_WARN("stream '{}': mapping is slower than the stream; frames are dropped from now "
+                      "on when the buffer of {} frames is full (report.json frames_dropped)",
+                      input_, capacity_);
+      }
+      buffer_.pop_front();
+      ++dropped_;
+    } else {
+      changed_.wait(lock, [this] { return buffer_.size() < capacity_ || closing_.load(); });
+    }
+  }
+  if (closing_.load()) return false;
+  buffer_.push_back(std::move(frame));
+  lock.unlock();
+  changed_.notify_all();
+  return true;
+}
+
+void StreamSource::ReadLoop() {
+  std::string reason = "the sender ended it";
+  try {
+    while (!closing_.load()) {
+      wait_start_.store(Clock::now().time_since_epoch().count());
+      if (!decoder_->Grab()) {
+        if (options_.end_stream.IsCancelled()) {
+          reason = "ended on request";
+        } else if (timed_out_.load()) {
+          reason = fmt::format("nothing received for {:.3g} s", options_.stream_stall_timeout_s);
+        }
+        break;
+      }
+      const int64_t index = decoder_->index();
+      if (index % options_.stride != 0) continue;
+      Frame frame;
+      frame.index = index;
+      frame.timestamp_s = static_cast<double>(index) / info_.fps;
+      frame.original_size = decoder_->display_size();
+      decoder_->Retrieve(info_.processing_size, &frame.bgr);
+      if (!Push(std::move(frame))) break;
+    }
+  } catch (...) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    error_ = std::current_exception();
+  }
+  if (!closing_.load()) {
+    GLAM_LOG_INFO("stream '{}' ended after frame {} ({})", input_, decoder_->index(), reason);
+  }
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    finished_ = true;
+  }
+  changed_.notify_all();
+}
+
+std::optional<Frame> StreamSource::Next() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  changed_.wait(lock, [this] { return !buffer_.empty() || finished_; });
+  if (buffer_.empty()) {
+    if (error_) std::rethrow_exception(error_);
+    return std::nullopt;
+  }
+  Frame frame = std::move(buffer_.front());
+  buffer_.pop_front();
+  ++delivered_;
+  next_index_ = frame.index + options_.stride;
+  lock.unlock();
+  changed_.notify_all();
+  return frame;
+}
+
+void StreamSource::SeekTo(int64_t index) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (index == next_index_) return;
+  throw InputError(fmt::format("'{}' is a live stream: it cannot seek to frame {} (next is {})", input_,
+                               index, next_index_));
+}
+
+int64_t StreamSource::frames_delivered() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return delivered_;
+}
+
+int64_t StreamSource::frames_dropped() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return dropped_;
+}
+
+}  // namespace glam

@@ -1,0 +1,150 @@
+// A live stream through the whole pipeline (engine/video/stream_source.h): the lawnmower
+// fixture's video, remuxed to MPEG-TS as a live feed would arrive, is fed through a pipe. It
+// must map as the file does (every frame decoded and posed, ATE within the file run's bounds;
+// measured: 0.069 m as a file), report itself as a stream, and when the sender never ends, the
+// user's end request (glam map: the first Ctrl-C) must still give the finished map of what
+// arrived. Ground truth: the fixture's trajectory (`glam eval`).
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <fstream>
+#include <sstream>
+#include <thread>
+#include <vector>
+
+#include <cstdlib>
+#include <filesystem>
+#include <iostream>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "engine/core/intrinsics_io.h"
+#include "engine/pipeline/mapping_job.h"
+#include "engine/pipeline/mapping_options.h"
+#include "tests/support/pipe_feeder.h"
+#include "tests/support/temp_dir.h"
+#include "tools/eval/evaluation.h"
+
+namespace glam {
+namespace {
+
+namespace fs = std::filesystem;
+
+const fs::path kClip = fs::path(GLAM_TEST_FIXTURES_DIR) / "lawnmower_small";
+constexpr int kClipFrames = 300;
+
+class StreamMapping : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    signal(SIGPIPE, SIG_IGN);
+    dir_ = testing::FreshTempDir("stream_mapping");
+    stream_ = dir_ / "feed.ts";
+    const std::string remux = "ffmpeg -nostdin -v error -y -i '" + (kClip / "video.mp4").string() +
+                              "' -c copy -f mpegts '" + stream_.string() + "'";
+    ASSERT_EQ(std::system(remux.c_str()), 0) << remux;
+    UseCalibration(&options_, ReadIntrinsicsJson(kClip / "intrinsics.json"));
+    options_.source.allow_streams = true;
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  fs::path dir_;
+  fs::path stream_;
+  MappingOptions options_;
+};
+
+TEST_F(StreamMapping, ALiveStreamMapsLikeItsFile) {
+  testing::PipeFeeder feeder(stream_);
+  const fs::path out = dir_ / "out";
+  const MappingReport report = RunMapping(feeder.url(), out, options_);
+  const eval::EvaluationResult result = eval::EvaluateDirectories(kClip, out, {});
+  std::cout << "stream: " << eval::Summary(result) << "\n";
+  EXPECT_TRUE(report.input_is_stream);
+  EXPECT_EQ(report.frames_total, -1);  // a stream announces no length
+  EXPECT_EQ(report.frames_decoded, kClipFrames);
+  EXPECT_EQ(report.frames_dropped, 0);  // a pipe waits for the mapper
+  EXPECT_GE(report.frames_posed, kClipFrames - 3);
+  EXPECT_LT(result.trajectory.ate_rmse, 0.1);
+  EXPECT_TRUE(fs::exists(out / "tileset.json"));
+}
+
+TEST_F(StreamMapping, TheEndRequestFinishesTheMapOfWhatArrived) {
+  // The sender stays connected after its last byte: only the request can end this stream.
+  testing::PipeFeeder feeder(stream_, SIZE_MAX, /*hold_open=*/true);
+  options_.source.stream_stall_timeout_s = 600;
+  const CancellationToken end = options_.source.end_stream;
+  const auto progress = [&end](const MappingProgress& p) {
+    if (p.frames_done >= 200) end.Cancel();
+  };
+  const fs::path out = dir_ / "out";
+  const MappingReport report = RunMapping(feeder.url(), out, options_, progress);
+  const eval::EvaluationResult result = eval::EvaluateDirectories(kClip, out, {});
+  std::cout << "ended at frame " << report.frames_decoded << ": " << eval::Summary(result) << "\n";
+  EXPECT_GE(report.frames_decoded, 200);
+  EXPECT_LE(report.frames_decoded, kClipFrames);
+  EXPECT_GE(report.frames_posed, report.frames_decoded - 3);
+  EXPECT_EQ(result.trajectory.matched, report.frames_posed);
+  EXPECT_LT(result.trajectory.ate_rmse, 0.15);
+  EXPECT_TRUE(fs::exists(out / "report.json"));
+}
+
+std::string ReadText(const fs::path& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+TEST_F(StreamMapping, CtrlCEndsAStreamOnStandardInputAndTheCliWritesTheMap) {
+  // `glam map - < feed` with a sender that never closes: the first SIGINT ends the input,
+  // and glam map exits 0 with the map written.
+  testing::PipeFeeder feeder(stream_, SIZE_MAX, /*hold_open=*/true);
+  const fs::path out = dir_ / "cli_out";
+  const fs::path log = dir_ / "cli.log";
+  std::vector<std::string> args = {GLAM_BIN, "map", "-", "--out", out.string(), "--intrinsics",
+                                   (kClip / "intrinsics.json").string()};
+  std::vector<char*> argv;
+  for (std::string& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  const pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    dup2(feeder.source_fd(), STDIN_FILENO);
+    const int fd = open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    dup2(fd, STDOUT_FILENO);
+    dup2(fd, STDERR_FILENO);
+    execv(argv[0], argv.data());
+    _exit(127);
+  }
+  // Once the stream is open and mapping has started, the user presses Ctrl-C.
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+  while (ReadText(log).find("mapping: ") == std::string::npos && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  kill(pid, SIGINT);
+  int status = 0;
+  pid_t done = 0;
+  while ((done = waitpid(pid, &status, WNOHANG)) == 0 && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  if (done == 0) {
+    kill(pid, SIGKILL);
+    waitpid(pid, &status, 0);
+    FAIL() << "glam map did not end after Ctrl-C\n" << ReadText(log);
+  }
+  const std::string output = ReadText(log);
+  ASSERT_TRUE(WIFEXITED(status)) << output;
+  EXPECT_EQ(WEXITSTATUS(status), 0) << output;
+  EXPECT_NE(output.find("ending the stream"), std::string::npos) << output;
+  const nlohmann::json report = nlohmann::json::parse(ReadText(out / "report.json"));
+  EXPECT_TRUE(report["input_is_stream"].get<bool>());
+  EXPECT_GT(report["frames_posed"].get<int>(), 0);
+  EXPECT_TRUE(fs::exists(out / "trajectory.tum"));
+}
+
+}  // namespace
+}  // namespace glam

@@ -1,0 +1,279 @@
+// StreamSource (live streams): every frame of a stream arrives in order with its stream index;
+// when the reader is too slow, whole frames are dropped (the oldest buffered ones) and the
+// frames that remain still carry the right index; a silent stream, a sender that never
+// connects and the user's end request each end the input within their time; and nothing but
+// the program's own choice (allow_streams) makes FFmpeg open a URL. The frames carry their
+// index as grey levels (test_media.h), so the test knows which frame it was handed.
+#include <arpa/inet.h>
+#include <fcntl.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <signal.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "engine/core/error.h"
+#include "engine/video/frame_source.h"
+#include "engine/video/stream_source.h"
+#include "tests/support/pipe_feeder.h"
+#include "tests/video/test_media.h"
+
+namespace glam {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+using testing::DecodeIndex;
+using testing::PipeFeeder;
+
+constexpr int kFrames = 120;
+constexpr double kFps = 25.0;
+
+double SecondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// A TCP port nothing listens on right now.
+int FreePort() {
+  const int s = socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  bind(s, reinterpret_cast<sockaddr*>(&addr), sizeof(addr));
+  socklen_t length = sizeof(addr);
+  getsockname(s, reinterpret_cast<sockaddr*>(&addr), &length);
+  close(s);
+  return ntohs(addr.sin_port);
+}
+
+class StreamSourceTest : public testing::TempDirTest {
+ protected:
+  void SetUp() override {
+    TempDirTest::SetUp();
+    signal(SIGPIPE, SIG_IGN);  // a closed reader must end a writer, not the test
+    if (!testing::HaveFfmpeg()) GTEST_SKIP() << "ffmpeg binary not available";
+    clip_ = dir_ / "clip.ts";
+    // H.264 in MPEG-TS, the usual container of a live feed.
+    ASSERT_TRUE(testing::WriteWithFfmpeg(clip_, {320, 240}, kFrames, kFps,
+                                         "-c:v libx264 -preset ultrafast -pix_fmt yuv420p -g 10 -f mpegts"));
+  }
+
+  FrameSourceOptions Options() const {
+    FrameSourceOptions options;
+    options.allow_streams = true;
+    options.stream_open_timeout_s = 10;
+    return options;
+  }
+
+  fs::path clip_;
+};
+
+TEST(StreamInput, RecognisesStreamUrlsAndNotPaths) {
+  for (const char* url : {"rtsp://192.168.1.1:8554/live", "RTSP://CAM/live", "rtmp://host/app/key",
+                          "srt://0.0.0.0:9000?mode=listener", "udp://@:5000", "rtp://239.0.0.1:5004",
+                          "tcp://0.0.0.0:5000?listen=1", "http://host/feed.ts", "https://host/feed.m3u8",
+                          "-", "pipe:0", "pipe:7"}) {
+    EXPECT_TRUE(IsStreamInput(url)) << url;
+  }
+  for (const char* path : {"clip.mp4", "/data/rtsp/clip.mp4", "./rtsp:/x", "file:///tmp/x.mp4",
+                           "concat:a.ts|b.ts", "C:/video.mp4", "ftp://host/x.mp4", ""}) {
+    EXPECT_FALSE(IsStreamInput(path)) << path;
+  }
+  using Drop = FrameSourceOptions::StreamDrop;
+  EXPECT_TRUE(StreamDropsFrames("rtsp://cam/live", Drop::kAuto));
+  EXPECT_TRUE(StreamDropsFrames("udp://@:5000", Drop::kAuto));
+  EXPECT_TRUE(StreamDropsFrames("SRT://host:9000", Drop::kAuto));
+  EXPECT_FALSE(StreamDropsFrames("tcp://host:5000", Drop::kAuto));
+  EXPECT_FALSE(StreamDropsFrames("-", Drop::kAuto));
+  EXPECT_TRUE(StreamDropsFrames("-", Drop::kDrop));
+  EXPECT_FALSE(StreamDropsFrames("rtsp://cam/live", Drop::kWait));
+  EXPECT_EQ(StreamUrl("-"), "pipe:0");
+  EXPECT_EQ(StreamUrl("udp://@:5000"), "udp://@:5000");
+}
+
+TEST(StreamInput, UrlsAreOnlyOpenedWhenAllowed) {
+  // The server passes paths it stored itself and never allows streams: a URL is then just a
+  // file that does not exist, and FFmpeg is never asked to connect anywhere.
+  const std::string url = "tcp://127.0.0.1:" + std::to_string(FreePort());
+  try {
+    OpenFrameSource(url, FrameSourceOptions{});
+    ADD_FAILURE() << "opened " << url;
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("does not exist"), std::string::npos) << e.what();
+  }
+  FrameSourceOptions allowed;
+  allowed.allow_streams = true;
+  allowed.stream_open_timeout_s = 5;
+  try {
+    OpenFrameSource(url, allowed);  // nobody listens: connection refused
+    ADD_FAILURE() << "opened " << url;
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("cannot open stream"), std::string::npos) << e.what();
+  }
+  allowed.stream_buffer_s = -1;
+  EXPECT_THROW(allowed.Check(), InputError);
+}
+
+TEST_F(StreamSourceTest, PipeDeliversEveryFrameInOrder) {
+  PipeFeeder feeder(clip_);
+  auto source = OpenFrameSource(feeder.url(), Options());
+  auto* stream = dynamic_cast<StreamSource*>(source.get());
+  ASSERT_NE(stream, nullptr);
+  EXPECT_FALSE(stream->drops_frames());  // a pipe waits for its reader
+  const FrameSourceInfo& info = source->info();
+  EXPECT_EQ(info.frame_count, -1);
+  EXPECT_NEAR(info.fps, kFps, 1e-6);
+  EXPECT_EQ(info.processing_size, cv::Size(320, 240));
+  EXPECT_NO_THROW(source->SeekTo(0));  // where it is
+  EXPECT_THROW(source->SeekTo(5), InputError);
+
+  int expected = 0;
+  while (auto frame = source->Next()) {
+    ASSERT_EQ(frame->index, expected);
+    EXPECT_DOUBLE_EQ(frame->timestamp_s, expected / kFps);
+    EXPECT_EQ(DecodeIndex(frame->bgr, kFrames), expected);
+    ++expected;
+  }
+  EXPECT_EQ(expected, kFrames);
+  EXPECT_EQ(source->frames_delivered(), kFrames);
+  EXPECT_EQ(source->frames_dropped(), 0);
+  EXPECT_FALSE(source->ended_early());
+  EXPECT_THROW(source->SeekTo(0), InputError);  // a stream does not go back
+}
+
+TEST_F(StreamSourceTest, StrideKeepsTheStreamIndices) {
+  PipeFeeder feeder(clip_);
+  FrameSourceOptions options = Options();
+  options.stride = 3;
+  auto source = OpenFrameSource(feeder.url(), options);
+  int expected = 0;
+  while (auto frame = source->Next()) {
+    ASSERT_EQ(frame->index, expected);
+    EXPECT_EQ(DecodeIndex(frame->bgr, kFrames), expected);
+    expected += 3;
+  }
+  EXPECT_EQ(expected, kFrames);
+}
+
+TEST_F(StreamSourceTest, DropsTheOldestFramesWhenTheReaderFallsBehind) {
+  PipeFeeder feeder(clip_);
+  FrameSourceOptions options = Options();
+  options.stream_drop = FrameSourceOptions::StreamDrop::kDrop;
+  options.stream_buffer_s = 0.12;  // 3 frames at 25 fps
+  auto source = OpenFrameSource(feeder.url(), options);
+  auto* stream = dynamic_cast<StreamSource*>(source.get());
+  ASSERT_NE(stream, nullptr);
+  EXPECT_TRUE(stream->drops_frames());
+  EXPECT_EQ(stream->buffer_capacity(), 3u);
+
+  std::vector<int64_t> indices;
+  while (auto frame = source->Next()) {
+    // Each frame is the one its index says, whatever was dropped around it.
+    EXPECT_EQ(DecodeIndex(frame->bgr, kFrames), frame->index);
+    if (!indices.empty()) {
+      EXPECT_GT(frame->index, indices.back());
+    }
+    indices.push_back(frame->index);
+    std::this_thread::sleep_for(std::chrono::milliseconds(25));  // mapping, slower than decoding
+  }
+  ASSERT_FALSE(indices.empty());
+  EXPECT_GT(source->frames_dropped(), 0);
+  EXPECT_EQ(static_cast<int64_t>(indices.size()) + source->frames_dropped(), kFrames);
+  EXPECT_EQ(indices.front(), 0);
+  EXPECT_EQ(indices.back(), kFrames - 1);  // the newest frames are kept
+}
+
+TEST_F(StreamSourceTest, ASilentSenderEndsTheStreamAfterTheStallTimeout) {
+  // Half the stream, then the sender stays connected but sends nothing.
+  PipeFeeder feeder(clip_, static_cast<std::size_t>(fs::file_size(clip_) / 2), /*hold_open=*/true);
+  FrameSourceOptions options = Options();
+  options.stream_stall_timeout_s = 0.5;
+  auto source = OpenFrameSource(feeder.url(), options);
+  const auto start = Clock::now();
+  int frames = 0;
+  while (auto frame = source->Next()) {
+    EXPECT_EQ(DecodeIndex(frame->bgr, kFrames), frame->index);
+    ++frames;
+  }
+  EXPECT_LT(SecondsSince(start), 5.0);
+  EXPECT_GT(frames, 10);
+  EXPECT_LT(frames, kFrames);
+  feeder.Release();
+}
+
+TEST_F(StreamSourceTest, TheEndRequestEndsTheStreamAndKeepsTheBufferedFrames) {
+  PipeFeeder feeder(clip_, SIZE_MAX, /*hold_open=*/true);  // never ends by itself
+  FrameSourceOptions options = Options();
+  options.stream_stall_timeout_s = 60;  // only the request may end it
+  auto source = OpenFrameSource(feeder.url(), options);
+  int frames = 0;
+  Clock::time_point requested;
+  while (auto frame = source->Next()) {
+    EXPECT_EQ(DecodeIndex(frame->bgr, kFrames), frame->index);
+    if (++frames == 10) {
+      options.end_stream.Cancel();  // the token is shared with the source's copy
+      requested = Clock::now();
+    }
+  }
+  EXPECT_LT(SecondsSince(requested), 5.0);
+  EXPECT_GE(frames, 10);
+  EXPECT_EQ(source->frames_dropped(), 0);
+}
+
+TEST_F(StreamSourceTest, GivesUpWhenNoSenderConnects) {
+  FrameSourceOptions options = Options();
+  options.stream_open_timeout_s = 0.5;
+  const auto start = Clock::now();
+  const std::string url = "tcp://127.0.0.1:" + std::to_string(FreePort()) + "?listen=1";
+  try {
+    OpenFrameSource(url, options);
+    ADD_FAILURE() << "opened " << url;
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("cannot open stream"), std::string::npos) << e.what();
+  }
+  EXPECT_LT(SecondsSince(start), 5.0);
+}
+
+TEST_F(StreamSourceTest, ReadsWhatASenderPushesOverTcp) {
+  // GLAM listens; ffmpeg connects (retrying until the listener is up) and sends the clip.
+  const int port = FreePort();
+  const std::string command =
+      "for i in $(seq 100); do ffmpeg -nostdin -v error -i '" + clip_.string() +
+      "' -c copy -f mpegts tcp://127.0.0.1:" + std::to_string(port) +
+      " && exit 0; sleep 0.1; done; exit 1";
+  const pid_t sender = fork();
+  ASSERT_GE(sender, 0);
+  if (sender == 0) {
+    execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  int expected = 0;
+  {
+    auto source = OpenFrameSource("tcp://127.0.0.1:" + std::to_string(port) + "?listen=1", Options());
+    while (auto frame = source->Next()) {
+      ASSERT_EQ(frame->index, expected);
+      EXPECT_EQ(DecodeIndex(frame->bgr, kFrames), expected);
+      ++expected;
+    }
+    EXPECT_EQ(source->frames_dropped(), 0);
+  }
+  int status = 0;
+  waitpid(sender, &status, 0);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+  EXPECT_EQ(expected, kFrames);
+}
+
+}  // namespace
+}  // namespace glam
