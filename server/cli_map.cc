@@ -204,7 +204,8 @@ void RegisterMapCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--stride", args->options.source.stride, "Use every N-th frame")->capture_default_str();
   cmd->add_option("--stream-buffer", args->options.source.stream_buffer_s,
-                  "Live streams: seconds of frames decoded ahead of mapping")
+                  "Live streams: seconds of frames decoded ahead of mapping (at most 256 MB of "
+                  "frames)")
       ->capture_default_str();
   cmd->add_option("--stream-drop", args->stream_drop,
                   "Live streams: when mapping falls behind and the buffer is full, drop the oldest "

@@ -18,6 +18,7 @@ void FrameSourceOptions::Check() const {
   if (max_image_size != 0) CheckGreaterEqual("FrameSourceOptions.max_image_size", max_image_size, 16);
   CheckGreaterEqual("FrameSourceOptions.stride", stride, 1);
   CheckInRange("FrameSourceOptions.stream_buffer_s", stream_buffer_s, 0.0, 600.0);
+  CheckInRange("FrameSourceOptions.stream_buffer_max_mb", stream_buffer_max_mb, 1, 65536);
   CheckInRange("FrameSourceOptions.stream_open_timeout_s", stream_open_timeout_s, 0.01, 86400.0);
   CheckInRange("FrameSourceOptions.stream_stall_timeout_s", stream_stall_timeout_s, 0.01, 86400.0);
   for (const auto& [key, value] : stream_options) {

@@ -55,8 +55,12 @@ struct FrameSourceOptions {
   // udp://, tcp://, http://, "-" for standard input, ...) when this is true: a program that
   // passes paths it did not choose itself (the server) must never make FFmpeg open a URL.
   bool allow_streams = false;
-  // Frames decoded ahead of mapping, in seconds of stream (at least 2 frames).
-  double stream_buffer_s = 1.0;
+  // Frames decoded ahead of mapping, in seconds of stream (at least 2 frames), and at most
+  // stream_buffer_max_mb of them. 2 s: a submap's completion holds the builder for ~1-2 s, and
+  // with 1 s a 640x360 stream that maps at 44 fps from its file still lost 9 of 600 frames
+  // there (bench/live_stream.sh); at 1280x720 two seconds are ~170 MB.
+  double stream_buffer_s = 2.0;
+  int stream_buffer_max_mb = 256;
   // What happens when mapping falls behind a stream and the buffer is full: kDrop discards the
   // oldest buffered frame (a live sender does not wait: unread network data is lost, or the
   // sender drops the connection), kWait stops reading until there is room (a pipe or a file

@@ -99,7 +99,10 @@ StreamSource::StreamSource(const std::string& input, const FrameSourceOptions& o
   info_.original_size = decoder_->display_size();
   info_.processing_size = ProcessingSize(info_.original_size, options_.max_image_size);
   info_.scale = static_cast<double>(info_.processing_size.width) / info_.original_size.width;
-  capacity_ = static_cast<std::size_t>(std::max(2.0, std::round(options_.stream_buffer_s * info_.fps)));
+  const double frame_bytes = 3.0 * info_.processing_size.area();  // 8-bit BGR
+  const double by_memory = std::floor(options_.stream_buffer_max_mb * 1048576.0 / frame_bytes);
+  capacity_ = static_cast<std::size_t>(
+      std::max(2.0, std::min(std::round(options_.stream_buffer_s * info_.fps), by_memory)));
 
   Frame first;
   first.index = decoder_->index();

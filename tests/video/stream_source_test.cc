@@ -195,6 +195,21 @@ TEST_F(StreamSourceTest, DropsTheOldestFramesWhenTheReaderFallsBehind) {
   EXPECT_EQ(indices.back(), kFrames - 1);  // the newest frames are kept
 }
 
+TEST_F(StreamSourceTest, TheBufferHoldsSecondsOfStreamUpToItsMemoryBound) {
+  {
+    PipeFeeder feeder(clip_);
+    FrameSourceOptions options = Options();
+    auto source = OpenFrameSource(feeder.url(), options);
+    EXPECT_EQ(dynamic_cast<StreamSource&>(*source).buffer_capacity(), 50u);  // 2 s at 25 fps
+  }
+  PipeFeeder feeder(clip_);
+  FrameSourceOptions options = Options();
+  options.stream_buffer_s = 10;
+  options.stream_buffer_max_mb = 1;  // 4 frames of 320x240 BGR (230,400 bytes each)
+  auto source = OpenFrameSource(feeder.url(), options);
+  EXPECT_EQ(dynamic_cast<StreamSource&>(*source).buffer_capacity(), 4u);
+}
+
 TEST_F(StreamSourceTest, ASilentSenderEndsTheStreamAfterTheStallTimeout) {
   // Half the stream, then the sender stays connected but sends nothing.
   PipeFeeder feeder(clip_, static_cast<std::size_t>(fs::file_size(clip_) / 2), /*hold_open=*/true);
