@@ -1,5 +1,6 @@
 #include "engine/pipeline/mapping_job.h"
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <exception>
@@ -177,7 +178,8 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
 
   MappingReport report;
   report.input = input.string();
-  // A live stream has no frame count and cannot seek: it is never resumed, and has no sidecar.
+  // A live stream has no frame count, cannot seek (a resumed run goes on with what arrives
+  // now) and has no sidecar.
   const bool stream = dynamic_cast<const StreamSource*>(source.get()) != nullptr;
   report.input_is_stream = stream;
   if (const auto* folder = dynamic_cast<const ImageFolderSource*>(source.get())) {
@@ -220,14 +222,24 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   }
   if (gps) GLAM_LOG_INFO("GPS track {}: {} positions", report.gps_track, gps->size());
   const std::optional<ResumeCheckpoint> resume =
-      options.resume && !stream ? UsableCheckpoint(out_dir, report) : std::nullopt;
+      options.resume ? UsableCheckpoint(out_dir, report) : std::nullopt;
+  // Where the input goes on: a file at the checkpoint's frame; a live stream, which cannot go
+  // back, with what arrives now, numbered after every frame the persisted submaps hold (the
+  // frames in between were seen by the interrupted run only; the next submap is linked to the
+  // earlier ones by retrieval where it sees their ground, else it starts a part of its own).
+  std::int64_t resume_frame = 0;
   if (resume) {
+    resume_frame = resume->resume_frame;
+    if (stream && resume->next_submap_id > 0) {
+      const Submap last = ReadSubmap(submaps_root, resume->next_submap_id - 1);
+      resume_frame = std::max<std::int64_t>(resume_frame, static_cast<std::int64_t>(last.last_frame) + 1);
+    }
     intrinsics.fx = intrinsics.fy = resume->focal;
     intrinsics.SetK1(resume->k1);
-    report.resumed_from_frame = resume->resume_frame;
-    source->SeekTo(resume->resume_frame);
+    report.resumed_from_frame = resume_frame;
+    source->SeekTo(resume_frame);
     GLAM_LOG_INFO("resuming {} at frame {} with submap {} (focal {:.1f} px, k1 {:.4f})", report.input,
-                  resume->resume_frame, resume->next_submap_id, resume->focal, resume->k1);
+                  resume_frame, resume->next_submap_id, resume->focal, resume->k1);
   } else {
     ClearPreviousRun(out_dir);
   }
@@ -284,7 +296,7 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   MappingProgress state;
   state.stage = "mapping";
   state.frames_total = report.frames_total;
-  const std::int64_t first_frame = resume ? resume->resume_frame / options.source.stride : 0;
+  const std::int64_t first_frame = resume_frame / options.source.stride;
   state.frames_done = first_frame;
   auto last_progress = Clock::now() - std::chrono::seconds(1);
   std::int64_t submaps_completed = resume ? resume->next_submap_id : 0;

@@ -142,6 +142,8 @@ bool StreamSource::ShouldInterrupt() const {
 
 bool StreamSource::Push(Frame frame) {
   std::unique_lock<std::mutex> lock(mutex_);
+  frame.index += index_offset_;
+  frame.timestamp_s = static_cast<double>(frame.index) / info_.fps;
   if (buffer_.size() >= capacity_) {
     if (drop_) {
       if (dropped_ == 0) {
@@ -178,8 +180,7 @@ void StreamSource::ReadLoop() {
       const int64_t index = decoder_->index();
       if (index % options_.stride != 0) continue;
       Frame frame;
-      frame.index = index;
-      frame.timestamp_s = static_cast<double>(index) / info_.fps;
+      frame.index = index;  // in the stream; Push() numbers it as SeekTo() asked
       frame.original_size = decoder_->display_size();
       decoder_->Retrieve(info_.processing_size, &frame.bgr);
       if (!Push(std::move(frame))) break;
@@ -217,6 +218,18 @@ std::optional<Frame> StreamSource::Next() {
 void StreamSource::SeekTo(int64_t index) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (index == next_index_) return;
+  if (delivered_ == 0 && index > next_index_) {
+    // Nothing delivered yet: number the stream's frames from `index` on (a resumed run goes on
+    // after the frames it has mapped), the buffered ones included.
+    const int64_t shift = index - next_index_;
+    for (Frame& frame : buffer_) {
+      frame.index += shift;
+      frame.timestamp_s = static_cast<double>(frame.index) / info_.fps;
+    }
+    index_offset_ += shift;
+    next_index_ = index;
+    return;
+  }
   throw InputError(fmt::format("'{}' is a live stream: it cannot seek to frame {} (next is {})", input_,
                                index, next_index_));
 }

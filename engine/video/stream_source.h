@@ -12,8 +12,8 @@
 // trajectory, as with --stride. Pipes and HTTP files wait for the reader instead (kWait).
 //
 // What a stream cannot do, and what follows: it has no frame count (FrameSourceInfo::frame_count
-// = -1: progress without a total), cannot seek (so a run on a stream is never resumed from a
-// checkpoint), and its end is decided here: the sender closes it, no frame arrives for
+// = -1: progress without a total) and cannot seek (a run resumed on a stream maps what arrives
+// from then on, numbered after the frames it mapped before), and its end is decided here: the sender closes it, no frame arrives for
 // stream_stall_timeout_s, or FrameSourceOptions::end_stream is cancelled (the user stops it);
 // each of these ends the input normally, so the map of what arrived is finished and written.
 #pragma once
@@ -58,8 +58,9 @@ class StreamSource : public FrameSource {
   // Rethrows an error of the reader (a pixel format that cannot be converted).
   std::optional<Frame> Next() override;
   const FrameSourceInfo& info() const override { return info_; }
-  // A stream only "seeks" to where it is (frame 0 before the first Next()); anything else is an
-  // InputError.
+  // A stream cannot seek. Before the first Next(), SeekTo(n > 0) numbers its frames from n on
+  // (the first one received gets index n: a resumed run continues after what it mapped);
+  // SeekTo(where it is) does nothing; anything else is an InputError.
   void SeekTo(int64_t index) override;
   int64_t frames_delivered() const override;
   bool ended_early() const override { return false; }
@@ -111,7 +112,8 @@ class StreamSource : public FrameSource {
   std::exception_ptr error_;
   int64_t dropped_ = 0;
   int64_t delivered_ = 0;
-  int64_t next_index_ = 0;  // index the next Next() starts at (SeekTo's only allowed target)
+  int64_t next_index_ = 0;    // index of the next frame Next() returns, if nothing is dropped
+  int64_t index_offset_ = 0;  // added to the stream's own frame numbers (SeekTo before Next)
   std::thread reader_;
 };
 

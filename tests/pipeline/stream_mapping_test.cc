@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <fstream>
 #include <sstream>
 #include <thread>
@@ -24,6 +25,9 @@
 #include <nlohmann/json.hpp>
 
 #include "engine/core/intrinsics_io.h"
+#include "engine/export/tum_trajectory.h"
+#include "engine/map/submap_io.h"
+#include "engine/pipeline/resume_checkpoint.h"
 #include "engine/pipeline/mapping_job.h"
 #include "engine/pipeline/mapping_options.h"
 #include "tests/support/pipe_feeder.h"
@@ -90,6 +94,46 @@ TEST_F(StreamMapping, TheEndRequestFinishesTheMapOfWhatArrived) {
   EXPECT_EQ(result.trajectory.matched, report.frames_posed);
   EXPECT_LT(result.trajectory.ate_rmse, 0.15);
   EXPECT_TRUE(fs::exists(out / "report.json"));
+}
+
+TEST_F(StreamMapping, AResumedStreamKeepsItsSubmapsAndNumbersNewFramesAfterThem) {
+  // A run on a stream is interrupted after its first submaps (a server restart); the resumed
+  // run cannot go back in the stream, so it maps what arrives now (here the flight again from
+  // its start: the same ground) with frame numbers after the mapped ones, and its submaps are
+  // linked to the earlier ones by retrieval.
+  options_.submap.keyframes_per_submap = 8;
+  const fs::path out = dir_ / "out";
+  {
+    testing::PipeFeeder feeder(stream_);
+    CancellationToken cancel;
+    const auto progress = [&cancel](const MappingProgress& p) {
+      if (p.submaps_completed >= 1) cancel.Cancel();
+    };
+    EXPECT_THROW(RunMapping(feeder.url(), out, options_, progress, cancel), Cancelled);
+  }
+  const std::optional<ResumeCheckpoint> checkpoint = ReadCheckpoint(out);
+  ASSERT_TRUE(checkpoint.has_value());
+  ASSERT_GE(checkpoint->next_submap_id, 1u);
+  const std::int64_t mapped_until = ReadSubmap(out / "submaps", checkpoint->next_submap_id - 1).last_frame;
+
+  testing::PipeFeeder feeder(stream_);
+  options_.resume = true;
+  const MappingReport report = RunMapping(feeder.url(), out, options_);
+  std::cout << "resumed at frame " << report.resumed_from_frame << " after frame " << mapped_until << ": "
+            << report.submaps << " submaps, " << report.disconnected_submaps << " disconnected, "
+            << report.frames_posed << " frames posed\n";
+  EXPECT_EQ(report.resumed_from_frame, mapped_until + 1);
+  EXPECT_GT(report.submaps, static_cast<std::int64_t>(checkpoint->next_submap_id));
+  EXPECT_EQ(report.disconnected_submaps, 0);
+  // Both runs' frames are in the trajectory, each frame number once.
+  const std::vector<TimedPose> poses = ReadTumTrajectory(out / "trajectory.tum");
+  std::int64_t before = 0, after = 0;
+  for (const TimedPose& pose : poses) {
+    const auto frame = static_cast<std::int64_t>(std::llround(pose.timestamp * 30.0));
+    (frame <= mapped_until ? before : after) += 1;
+  }
+  EXPECT_GE(before, mapped_until * 9 / 10);
+  EXPECT_GE(after, kClipFrames * 9 / 10);
 }
 
 std::string ReadText(const fs::path& path) {

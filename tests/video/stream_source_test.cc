@@ -137,7 +137,6 @@ TEST_F(StreamSourceTest, PipeDeliversEveryFrameInOrder) {
   EXPECT_NEAR(info.fps, kFps, 1e-6);
   EXPECT_EQ(info.processing_size, cv::Size(320, 240));
   EXPECT_NO_THROW(source->SeekTo(0));  // where it is
-  EXPECT_THROW(source->SeekTo(5), InputError);
 
   int expected = 0;
   while (auto frame = source->Next()) {
@@ -151,6 +150,27 @@ TEST_F(StreamSourceTest, PipeDeliversEveryFrameInOrder) {
   EXPECT_EQ(source->frames_dropped(), 0);
   EXPECT_FALSE(source->ended_early());
   EXPECT_THROW(source->SeekTo(0), InputError);  // a stream does not go back
+}
+
+TEST_F(StreamSourceTest, SeekingBeforeTheFirstFrameNumbersTheStreamFromThere) {
+  // A resumed run continues its frame numbers: the stream's first frame becomes frame 1000.
+  PipeFeeder feeder(clip_);
+  FrameSourceOptions options = Options();
+  options.stride = 2;
+  auto source = OpenFrameSource(feeder.url(), options);
+  source->SeekTo(1000);
+  int64_t expected = 1000;
+  while (auto frame = source->Next()) {
+    ASSERT_EQ(frame->index, expected);
+    EXPECT_DOUBLE_EQ(frame->timestamp_s, expected / kFps);
+    EXPECT_EQ(DecodeIndex(frame->bgr, kFrames), expected - 1000);
+    expected += 2;
+    if (expected == 1010) {
+      EXPECT_THROW(source->SeekTo(2000), InputError);  // not once frames were delivered
+      EXPECT_THROW(source->SeekTo(1004), InputError);
+    }
+  }
+  EXPECT_EQ(expected, 1000 + kFrames);
 }
 
 TEST_F(StreamSourceTest, StrideKeepsTheStreamIndices) {
