@@ -5,6 +5,7 @@
 
 #include <fmt/format.h>
 
+#include "api/stream_url.h"
 #include "engine/core/error.h"
 
 namespace glam::api {
@@ -272,6 +273,10 @@ json JobToJson(const Job& job, const std::string& api_base) {
     part["urls"] = {{"trajectory", dir + "/trajectory.tum"}, {"points", dir + "/points.ply"}};
     parts.push_back(std::move(part));
   }
+  json input = job.input_info;
+  if (input.is_object() && input.contains("stream_url") && input["stream_url"].is_string()) {
+    input["stream_url"] = RedactStreamUrl(input["stream_url"].get<std::string>());
+  }
   return {{"id", job.id},
           {"name", job.name},
           {"state", std::string(ToString(job.state))},
@@ -281,7 +286,7 @@ json JobToJson(const Job& job, const std::string& api_base) {
           {"urls", urls},
           {"progress", ProgressToJson(job.progress)},
           {"options", job.options},
-          {"input", job.input_info},
+          {"input", input},
           {"warnings", job.warnings},
           {"parts", parts}};
 }

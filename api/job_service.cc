@@ -10,6 +10,7 @@
 
 #include "api/api_error.h"
 #include "api/ids.h"
+#include "api/stream_url.h"
 #include "engine/core/error.h"
 #include "engine/core/logging.h"
 #include "engine/video/frame_source.h"
@@ -23,7 +24,9 @@ using nlohmann::json;
 MappingReport RunMappingExecutor(const Job& job, const fs::path& job_dir,
                                  const MappingOptions& options, const ProgressCallback& progress,
                                  const CancellationToken& cancel) {
-  return RunMapping(job_dir / job.input_file, job_dir, options, progress, cancel);
+  const fs::path input = IsStreamJob(job) ? fs::path(job.input_info["stream_url"].get<std::string>())
+                                          : job_dir / job.input_file;
+  return RunMapping(input, job_dir, options, progress, cancel);
 }
 
 json ProbeWithEngine(const fs::path& file) {
@@ -89,6 +92,11 @@ fs::path PartFile(const fs::path& dir, const std::string& id, const std::string&
 }
 
 }  // namespace
+
+bool IsStreamJob(const Job& job) {
+  return job.input_info.is_object() && job.input_info.contains("stream_url") &&
+         job.input_info["stream_url"].is_string();
+}
 
 JobService::JobService(JobServiceOptions options) : options_(std::move(options)) {
   if (!options_.executor) options_.executor = RunMappingExecutor;
@@ -217,6 +225,53 @@ Job JobService::CreateJob(const fs::path& upload, const std::string& original_na
   GLAM_LOG_INFO("job {} created ({}, {} bytes)", job.id, job.name,
                 input_info["size_bytes"].get<std::int64_t>());
   return Get(job.id);
+}
+
+Job JobService::CreateStreamJob(const std::string& url, const JobOptions& job_options) {
+  if (!options_.allow_streams) {
+    throw ApiError(403, "streams_disabled",
+                   "this server does not map live streams (start it with --allow-streams)");
+  }
+  CheckStreamUrl(url);
+  CheckCanQueue();
+  Job job;
+  do {
+    job.id = NewJobId();
+  } while (fs::exists(JobDir(job.id)) || store_->Get(job.id));
+  job.name = job_options.name.empty() ? RedactStreamUrl(url) : job_options.name;
+  job.state = JobState::kQueued;
+  job.created_ms = job.updated_ms = NowMs();
+  job.options = ToJson(job_options);
+  job.input_info = {{"stream_url", url}};  // shown redacted (JobToJson)
+  job.progress.stage = "queued";
+  std::error_code ec;
+  fs::create_directories(JobDir(job.id), ec);
+  if (ec) throw EnvironmentError(fmt::format("cannot create the job directory: {}", ec.message()));
+  {
+    std::lock_guard lock(mutex_);
+    store_->Insert(job);
+    EmitLocked(job, "state", {{"state", "queued"}, {"error", nullptr}});
+  }
+  runner_->Enqueue(job.id);
+  GLAM_LOG_INFO("job {} created (live stream {})", job.id, RedactStreamUrl(url));
+  return Get(job.id);
+}
+
+Job JobService::Finish(const std::string& id) {
+  std::lock_guard lock(mutex_);
+  Job job = GetLocked(id);
+  const auto live = live_.find(id);
+  if (!IsStreamJob(job) || job.state != JobState::kRunning || live == live_.end()) {
+    throw ApiError(409, "invalid_state",
+                   IsStreamJob(job)
+                       ? fmt::format("job {} is {}; only a running stream job can be finished", id, ToString(job.state))
+                       : fmt::format("job {} maps a file, which ends by itself; only a live-stream job can be "
+                                     "finished (cancel stops a file job)",
+                                     id));
+  }
+  live->second.end_stream.Cancel();
+  GLAM_LOG_INFO("job {}: the stream input ends by request; finishing the map", id);
+  return job;
 }
 
 Job JobService::GetLocked(const std::string& id) const {
@@ -466,6 +521,10 @@ void JobService::RunJob(const std::string& id, const CancellationToken& cancel) 
       return;
     }
     mapping_options.resume = job.resume;
+    if (IsStreamJob(job)) {
+      mapping_options.source.allow_streams = true;  // CreateStreamJob checked the URL
+      mapping_options.source.end_stream = live_[id].end_stream;
+    }
     if (job.input_file == kImagesFolder && !max_features_given) {
       mapping_options.sift.max_features = kPhotoFolderMaxFeatures;
     }

@@ -1,4 +1,4 @@
-// The mapping service without HTTP: accepts uploaded videos as jobs, runs them through the
+// The mapping service without HTTP: accepts uploaded videos (and live-stream URLs) as jobs, runs them through the
 // JobRunner, persists every state change in the JobStore, turns engine progress into SSE
 // events and answers queries. The REST layer (server/) is a thin translation of requests into
 // these calls; tests drive it directly.
@@ -61,7 +61,13 @@ struct JobServiceOptions {
   std::chrono::milliseconds progress_interval{500};
   JobExecutor executor;  // empty = RunMapping
   VideoProbe probe;      // empty = ProbeVideo
+  // Whether clients may create live-stream jobs (CreateStreamJob): the server then opens the
+  // URLs they send, so it is off by default (`glam serve --allow-streams`).
+  bool allow_streams = false;
 };
+
+// Whether the job maps a live stream (its input JSON holds "stream_url") rather than a file.
+bool IsStreamJob(const Job& job);
 
 struct JobPage {
   std::vector<Job> jobs;
@@ -107,6 +113,14 @@ class JobService {
   Job CreateJob(const std::filesystem::path& upload, const std::string& original_name,
                 const JobOptions& options, const std::string& telemetry = {});
 
+  // A live stream as a job's input (JobServiceOptions::allow_streams; 403 "streams_disabled"
+  // otherwise): an rtsp, rtsps, rtmp, rtmps, srt, udp, rtp, tcp, http or https URL (400
+  // "bad_request" for anything else, standard input and pipes included). Not probed: the job
+  // opens it when it starts (a stream that does not open fails the job with the reason). The
+  // job JSON's input is {"stream_url"} with any user:password shown as ***; the name defaults
+  // to that URL. The job ends when the sender stops, after the stall timeout, or at Finish().
+  Job CreateStreamJob(const std::string& url, const JobOptions& options);
+
   // All of these throw ApiError: 400 "invalid_id" for a malformed id, 404 "not_found".
   Job Get(const std::string& id) const;
   JobPage List(int limit, int offset) const;
@@ -115,6 +129,10 @@ class JobService {
   Job Cancel(const std::string& id, std::chrono::milliseconds wait = std::chrono::seconds(10));
   // completed | failed | canceled -> queued, outputs removed; 409 for queued / running.
   Job Restart(const std::string& id);
+  // Ends a running live-stream job's input: the map of what arrived is finished and the job
+  // completes as if the sender had stopped. Returns at once (the job is still running). 409
+  // "invalid_state" for a job that is not a running stream job.
+  Job Finish(const std::string& id);
   // Cancels a running job, then removes its record, events and files.
   void Delete(const std::string& id);
 
@@ -139,6 +157,7 @@ class JobService {
 
  private:
   struct Live {  // per running job, guarded by mutex_
+    CancellationToken end_stream;  // stream jobs: Finish() ends the input
     MappingProgress last;
     std::int64_t last_progress_ms = 0;
     std::optional<JobEvent> latest_progress;

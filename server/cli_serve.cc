@@ -32,6 +32,7 @@ struct ServeArgs {
   int concurrent_jobs = 1;
   int max_queued_jobs = 100;
   std::int64_t max_upload_mb = 8192;
+  bool allow_streams = false;
   server::HttpServerOptions http;
 };
 
@@ -88,6 +89,7 @@ void RunServe(ServeArgs& args) {
   service_options.data_dir = args.data_dir;
   service_options.concurrent_jobs = args.concurrent_jobs;
   service_options.max_queued_jobs = args.max_queued_jobs;
+  service_options.allow_streams = args.allow_streams;
   api::JobService service(service_options);
   server::HttpServer http(service, args.http);
   const int port = http.Bind();
@@ -136,6 +138,10 @@ void RegisterServeCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--max-queued-jobs", args->max_queued_jobs, "Queued jobs accepted (503 beyond)")
       ->capture_default_str();
+  cmd->add_flag("--allow-streams", args->allow_streams,
+                "Accept live-stream jobs (POST /jobs with a JSON body {\"stream_url\": \"rtsp://...\"}): the "
+                "server then connects to the URLs clients send (rtsp, rtmp, srt, udp, rtp, tcp, http); off "
+                "by default");
   cmd->add_option("--http-threads", args->http.http_threads, "HTTP worker threads")->capture_default_str();
   cmd->add_option("--max-sse-clients", args->http.max_sse_clients,
                   "Open event streams (each holds an HTTP thread; 503 beyond)")

@@ -123,6 +123,9 @@ const std::vector<RouteDef>& RouteTable() {
     plain("POST", "/api/v1/jobs/{id}/restart", true, [](Context& ctx, const Request& req, Response& res) {
       SendJson(res, 200, api::JobToJson(ctx.service.Restart(JobIdParam(req))));
     });
+    plain("POST", "/api/v1/jobs/{id}/finish", true, [](Context& ctx, const Request& req, Response& res) {
+      SendJson(res, 200, api::JobToJson(ctx.service.Finish(JobIdParam(req))));
+    });
     for (const char* file : {"trajectory.tum", "trajectory.geojson", "points.ply", "report.json", "graph.json",
                              "tileset.json", "map.glb", "tiles/{submap}.glb",
                              "parts/{part}/trajectory.tum", "parts/{part}/points.ply"}) {

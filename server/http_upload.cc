@@ -221,18 +221,57 @@ void DrainRejectedBody(const httplib::Request& req, httplib::Response& res,
   }
 }
 
+// POST /api/v1/jobs with a JSON body: {"stream_url": "...", "options": {...}} (a live stream).
+static void HandleCreateStreamJob(Context& ctx, httplib::Response& res, const httplib::ContentReader& reader) {
+  constexpr std::size_t kMaxBody = 64 * 1024;
+  std::string body;
+  bool too_large = false;
+  reader([&](const char* data, std::size_t size) {
+    if (body.size() + size > kMaxBody) {
+      too_large = true;
+      return false;
+    }
+    body.append(data, size);
+    return true;
+  });
+  if (too_large) {
+    res.set_header("Connection", "close");
+    throw ApiError(413, "payload_too_large", fmt::format("a stream job's JSON body is at most {} bytes", kMaxBody));
+  }
+  const nlohmann::json j = nlohmann::json::parse(body, nullptr, /*allow_exceptions=*/false);
+  if (!j.is_object()) throw ApiError(400, "bad_request", "the body must be a JSON object {\"stream_url\": ...}");
+  for (const auto& [key, value] : j.items()) {
+    if (key != "stream_url" && key != "options") {
+      throw ApiError(400, "bad_request", fmt::format("unknown field \"{}\" (stream_url, options)", key));
+    }
+  }
+  if (!j.contains("stream_url") || !j["stream_url"].is_string()) {
+    throw ApiError(400, "bad_request", "stream_url (a string) is required");
+  }
+  const api::JobOptions options =
+      j.contains("options") ? api::ParseJobOptions(j["options"]) : api::JobOptions{};
+  const api::Job job = ctx.service.CreateStreamJob(j["stream_url"].get<std::string>(), options);
+  res.set_header("Location", "/api/v1/jobs/" + job.id);
+  SendJson(res, 201, api::JobToJson(job));
+}
+
 void HandleCreateJob(Context& ctx, const httplib::Request& req, httplib::Response& res,
                      const httplib::ContentReader& reader) {
   const std::string content_type = req.get_header_value("Content-Type");
   const std::string media_type = content_type.substr(0, content_type.find(';'));
   const bool multipart = req.is_multipart_form_data();
   const bool raw = media_type.rfind("video/", 0) == 0 || media_type == "application/octet-stream";
+  if (media_type == "application/json") {
+    HandleCreateStreamJob(ctx, res, reader);
+    return;
+  }
   try {
     if (!multipart && !raw) {
       throw ApiError(415, "unsupported_media_type",
                      fmt::format("send the video as multipart/form-data (field \"video\", or photos as "
                                  "fields \"images\") or as a raw body with a video/* or "
-                                 "application/octet-stream content type, not \"{}\"",
+                                 "application/octet-stream content type, or a live stream as "
+                                 "application/json {{\"stream_url\": ...}}, not \"{}\"",
                                  content_type));
     }
     ctx.service.CheckCanQueue();

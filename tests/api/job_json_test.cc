@@ -1,4 +1,6 @@
 #include "api/job_json.h"
+#include "api/stream_url.h"
+#include "api/api_error.h"
 
 #include <gtest/gtest.h>
 
@@ -149,6 +151,20 @@ TEST(JobJson, JobJsonHasTheContractFields) {
   }
   EXPECT_EQ(ProgressFromJson(j["progress"]).revision, 3);
   EXPECT_EQ(ErrorJson("not_found", "x")["error"]["code"], "not_found");
+}
+
+TEST(StreamUrl, CredentialsAreRedactedAndOnlyNetworkStreamsPass) {
+  EXPECT_EQ(RedactStreamUrl("rtsp://cam:554/live"), "rtsp://cam:554/live");
+  EXPECT_EQ(RedactStreamUrl("rtsp://admin:secret@10.0.0.2:554/live?x=a@b"), "rtsp://***@10.0.0.2:554/live?x=a@b");
+  EXPECT_EQ(RedactStreamUrl("rtmp://user@host/app"), "rtmp://***@host/app");
+  EXPECT_EQ(RedactStreamUrl("srt://host:9000?passphrase=topsecret&latency=200"),
+            "srt://host:9000?passphrase=***&latency=200");
+  EXPECT_EQ(RedactStreamUrl("http://host/feed.ts?token=abc"), "http://host/feed.ts?token=***");
+  EXPECT_EQ(RedactStreamUrl("udp://@:5004"), "udp://@:5004");  // FFmpeg's "any address"
+  EXPECT_EQ(RedactStreamUrl("rtmp://host/app?Key=k1&x=1#frag"), "rtmp://host/app?Key=***&x=1#frag");
+  EXPECT_NO_THROW(CheckStreamUrl("srt://0.0.0.0:9000?mode=listener"));
+  EXPECT_NO_THROW(CheckStreamUrl("HTTPS://host/live.m3u8"));
+  EXPECT_THROW(CheckStreamUrl("tls://host:443"), ApiError);
 }
 
 }  // namespace

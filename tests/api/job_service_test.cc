@@ -28,14 +28,33 @@ using namespace std::chrono_literals;
 fs::path FreshDir(const std::string& name) { return glam::testing::FreshTempDir("api_service_" + name); }
 
 // The fake run (10 steps of 10 frames, held at step 5), plus what the service passed to it.
+// A stream job's fake run maps "frames" until its input is ended (Finish) or canceled.
 struct FakeEngine : glam::testing::FakeMapping {
   std::atomic<int> runs{0};
   std::atomic<bool> last_resume{false};
+  std::atomic<bool> stream_running{false};
+  std::atomic<bool> stream_allowed{false};
+  std::string stream_url;  // written before stream_running is set
 
   MappingReport Run(const Job& job, const fs::path& dir, const MappingOptions& options,
                     const ProgressCallback& progress, const CancellationToken& cancel) {
     ++runs;
     last_resume = options.resume;
+    if (IsStreamJob(job)) {
+      stream_url = job.input_info["stream_url"].get<std::string>();
+      stream_allowed = options.source.allow_streams;
+      stream_running = true;
+      MappingProgress p;
+      p.stage = "mapping";
+      while (!options.source.end_stream.IsCancelled()) {
+        cancel.ThrowIfCancelled();
+        ++p.frames_done;
+        progress(p);
+        std::this_thread::sleep_for(1ms);
+      }
+      stream_running = false;
+      return MappingReport{};
+    }
     if (job.name == "fail-input") throw InputError("the video has no texture");
     if (job.name == "fail-env") throw EnvironmentError("disk on fire");
     FakeMapping::Run(dir, progress, cancel);
@@ -246,6 +265,63 @@ TEST(JobService, InterruptedJobResumesAfterReopen) {
   EXPECT_GT(events.front().id, last_event);  // ids stay monotonic across the restart
   EXPECT_EQ(events.front().type, "state");
   EXPECT_EQ(events.front().data["state"], "queued");
+}
+
+TEST(JobService, StreamJobsNeedPermissionAndANetworkUrl) {
+  {
+    FakeEngine engine;
+    JobService service(Options(FreshDir("streams_off"), engine));
+    EXPECT_EQ(StatusOf([&] { service.CreateStreamJob("rtsp://cam/live", {}); }), 403);
+  }
+  FakeEngine engine;
+  JobServiceOptions options = Options(FreshDir("streams_urls"), engine);
+  options.allow_streams = true;
+  JobService service(options);
+  // Standard input, pipes and FFmpeg's file-reading protocols would reach the server's own
+  // files or descriptors.
+  for (const char* url : {"", "-", "pipe:0", "file:///etc/passwd", "/etc/passwd", "concat:a.ts|b.ts",
+                          "subfile,,start,0,end,0,,:/etc/passwd", "ftp://host/x.ts", "rtsp://cam/a b",
+                          "rtsp://cam/\nlive"}) {
+    EXPECT_EQ(StatusOf([&] { service.CreateStreamJob(url, {}); }), 400) << url;
+  }
+  EXPECT_EQ(StatusOf([&] { service.CreateStreamJob("rtsp://cam/" + std::string(3000, 'x'), {}); }), 400);
+  EXPECT_EQ(service.List(10, 0).total, 0);
+
+  const Job job = service.CreateStreamJob("rtsp://admin:secret@10.0.0.2:554/live", {});
+  EXPECT_TRUE(IsStreamJob(job));
+  const nlohmann::json shown = JobToJson(job);
+  EXPECT_EQ(shown["input"]["stream_url"], "rtsp://***@10.0.0.2:554/live");
+  EXPECT_EQ(shown["name"], "rtsp://***@10.0.0.2:554/live");
+  EXPECT_EQ(shown.dump().find("secret"), std::string::npos);
+  WaitFor([&] { return engine.stream_running.load(); });
+  // The engine gets the URL itself, credentials included, and may open it.
+  EXPECT_EQ(engine.stream_url, "rtsp://admin:secret@10.0.0.2:554/live");
+  EXPECT_TRUE(engine.stream_allowed.load());
+  service.Cancel(job.id);
+}
+
+TEST(JobService, FinishEndsARunningStreamJobWhichCompletes) {
+  FakeEngine engine;
+  engine.hold = true;
+  JobServiceOptions options = Options(FreshDir("stream_finish"), engine);
+  options.allow_streams = true;
+  JobService service(options);
+  // A file job holds the single worker: a stream job queued behind it cannot be finished yet.
+  const std::string file_job = service.CreateJob(Upload(service), "a.mp4", {}).id;
+  WaitFor([&] { return engine.at_hold.load(); });
+  JobOptions named;
+  named.name = "live";
+  const std::string stream_job = service.CreateStreamJob("udp://0.0.0.0:5004", named).id;
+  EXPECT_EQ(service.Get(stream_job).name, "live");
+  EXPECT_EQ(StatusOf([&] { service.Finish(stream_job); }), 409);  // queued
+  EXPECT_EQ(StatusOf([&] { service.Finish(file_job); }), 409);    // a file ends by itself
+  engine.hold = false;
+  WaitFor([&] { return engine.stream_running.load(); });
+  EXPECT_EQ(service.Finish(stream_job).state, JobState::kRunning);
+  FollowToEnd(service, stream_job);
+  EXPECT_EQ(service.Get(stream_job).state, JobState::kCompleted);
+  EXPECT_FALSE(engine.stream_running.load());
+  EXPECT_EQ(StatusOf([&] { service.Finish(stream_job); }), 409);  // completed
 }
 
 }  // namespace

@@ -51,6 +51,7 @@ class HttpApiTest : public ::testing::Test {
     api::JobServiceOptions service_options;
     service_options.data_dir = dir_ / "data";
     service_options.progress_interval = 0ms;
+    service_options.allow_streams = allow_streams_;
     service_options.executor = [this](const api::Job& job, const fs::path& d, const MappingOptions& o,
                                       const ProgressCallback& p, const CancellationToken& c) {
       {
@@ -121,6 +122,7 @@ class HttpApiTest : public ::testing::Test {
   fs::path ran_input_;
   int ran_max_features_ = 0;
   std::string token_;
+  bool allow_streams_ = false;  // JobServiceOptions::allow_streams for Start()
   std::unique_ptr<api::JobService> service_;
   std::unique_ptr<HttpServer> http_;
   std::thread thread_;
@@ -506,6 +508,42 @@ TEST_F(HttpApiTest, RawBodyUploadTakesOptionsFromQuery) {
   ASSERT_TRUE(res);
   ASSERT_EQ(res->status, 201) << res->body;
   EXPECT_EQ(json::parse(res->body)["options"]["keyframes_per_submap"], 6);
+}
+
+TEST_F(HttpApiTest, StreamJobsAreOffByDefault) {
+  Start({}, "streams_off");
+  auto client = Client();
+  ExpectError(client.Post("/api/v1/jobs", R"({"stream_url": "rtsp://cam/live"})", "application/json"), 403,
+              "streams_disabled", "streams off");
+}
+
+TEST_F(HttpApiTest, StreamJobsFromJsonAndTheirErrors) {
+  allow_streams_ = true;
+  Start({}, "streams_on");
+  auto client = Client();
+  const auto post = [&](const std::string& body) { return client.Post("/api/v1/jobs", body, "application/json"); };
+  ExpectError(post("{not json"), 400, "bad_request", "malformed JSON");
+  ExpectError(post(R"(["rtsp://cam/live"])"), 400, "bad_request", "not an object");
+  ExpectError(post(R"({"url": "rtsp://cam/live"})"), 400, "bad_request", "unknown field");
+  ExpectError(post(R"({"options": {}})"), 400, "bad_request", "no stream_url");
+  ExpectError(post(R"({"stream_url": 5})"), 400, "bad_request", "stream_url not a string");
+  ExpectError(post(R"({"stream_url": "file:///etc/passwd"})"), 400, "bad_request", "a file URL");
+  ExpectError(post(R"({"stream_url": "-"})"), 400, "bad_request", "standard input");
+  ExpectError(post(R"({"stream_url": "rtsp://cam/live", "options": {"stride": 0}})"), 400, "", "bad options");
+  ExpectError(post(R"({"stream_url": "rtsp://cam/)" + std::string(70000, 'x') + "\"}"), 413,
+              "payload_too_large", "huge body");
+
+  auto res = post(R"({"stream_url": "rtsp://user:pw@cam/live", "options": {"name": "drone 1"}})");
+  ASSERT_TRUE(res);
+  ASSERT_EQ(res->status, 201) << res->body;
+  const json job = json::parse(res->body);
+  EXPECT_EQ(res->get_header_value("Location"), "/api/v1/jobs/" + job["id"].get<std::string>());
+  EXPECT_EQ(job["name"], "drone 1");
+  EXPECT_EQ(job["input"]["stream_url"], "rtsp://***@cam/live");
+  // A file job cannot be finished, only canceled.
+  const std::string file_job = CreateJob(client);
+  ExpectError(client.Post("/api/v1/jobs/" + file_job + "/finish"), 409, "invalid_state", "finish a file job");
+  ExpectError(client.Post("/api/v1/jobs/0123456789abcdef/finish"), 404, "not_found", "finish an unknown job");
 }
 
 TEST_F(HttpApiTest, BadRequestCorpusGetsDocumentedStatuses) {

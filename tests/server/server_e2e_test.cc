@@ -1,8 +1,14 @@
 // `glam serve` as a real process with the real engine on a tiny synthetic clip (CTest fixture
 // synth_server_tiny): a full job followed over SSE and checked against ground truth, cancel
 // and restart mid-run, kill -9 mid-job + restart on the same data directory (the job is
-// listed, resumes and completes), and SIGTERM exits 0 leaving the job resumable.
+// listed, resumes and completes), SIGTERM exits 0 leaving the job resumable, and a live-stream
+// job mapping what an ffmpeg sender pushes until it is finished over REST.
+#include <arpa/inet.h>
+#include <netinet/in.h>
 #include <signal.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <filesystem>
@@ -82,6 +88,80 @@ std::int64_t WaitForProgress(httplib::Client& client, const std::string& id, std
     return e.type == "progress" && e.data["frames_done"].get<std::int64_t>() >= min_frames;
   }, 120s);
   return last_id;
+}
+
+// A TCP port nothing listens on right now.
+int FreePort() {
+  const int s = socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  bind(s, reinterpret_cast<sockaddr*>(&addr), sizeof(addr));
+  socklen_t length = sizeof(addr);
+  getsockname(s, reinterpret_cast<sockaddr*>(&addr), &length);
+  close(s);
+  return ntohs(addr.sin_port);
+}
+
+TEST(ServerE2E, LiveStreamJobMapsWhatArrivesUntilFinished) {
+  // The server listens for the stream (tcp://...?listen=1); an ffmpeg sender pushes the clip in
+  // real time over and over, like a drone's feed that never ends, until the client finishes
+  // the job over REST. The job must complete with the map of what arrived.
+  const fs::path dir = glam::testing::FreshTempDir("e2e_stream");
+  const fs::path feed = dir / "feed.ts";
+  fs::create_directories(dir);
+  const std::string remux = "ffmpeg -nostdin -v error -y -i '" + (kClip / "video.mp4").string() +
+                            "' -c copy -f mpegts '" + feed.string() + "'";
+  ASSERT_EQ(std::system(remux.c_str()), 0);
+  ServerProcess server;
+  ASSERT_TRUE(server.Start(GLAM_BIN, dir / "data", {"--allow-streams"})) << server.error();
+  auto client = ClientFor(server);
+  const int port = FreePort();
+  const json request = {{"stream_url", fmt::format("tcp://127.0.0.1:{}?listen=1", port)},
+                        {"options", {{"name", "live"}, {"keyframes_per_submap", 6}}}};
+  auto res = client.Post("/api/v1/jobs", request.dump(), "application/json");
+  ASSERT_TRUE(res);
+  ASSERT_EQ(res->status, 201) << res->body;
+  const std::string id = json::parse(res->body)["id"];
+
+  const pid_t sender = fork();
+  ASSERT_GE(sender, 0);
+  if (sender == 0) {
+    setpgid(0, 0);
+    const std::string command = fmt::format(
+        "for i in $(seq 300); do ffmpeg -nostdin -v error -re -stream_loop -1 -i '{}' -c copy -f mpegts "
+        "tcp://127.0.0.1:{} && exit 0; sleep 0.1; done",
+        feed.string(), port);
+    execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  WaitForProgress(client, id, 60);
+  res = client.Post("/api/v1/jobs/" + id + "/finish");
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 200) << res->body;
+  const std::string state = FollowToEnd(client, id);
+  kill(-sender, SIGKILL);
+  waitpid(sender, nullptr, 0);
+  ASSERT_EQ(state, "completed") << GetJob(client, id).dump();
+
+  res = client.Get("/api/v1/jobs/" + id + "/report.json");
+  ASSERT_TRUE(res);
+  ASSERT_EQ(res->status, 200);
+  const json report = json::parse(res->body);
+  EXPECT_TRUE(report["input_is_stream"].get<bool>());
+  EXPECT_GE(report["frames_decoded"].get<int>(), 60);
+  res = client.Get("/api/v1/jobs/" + id + "/trajectory.tum");
+  ASSERT_TRUE(res);
+  ASSERT_EQ(res->status, 200);
+  const fs::path result_dir = dir / "result";
+  fs::create_directories(result_dir);
+  std::ofstream(result_dir / "trajectory.tum") << res->body;
+  // The first pass of the clip is the ground truth's time range (a repeat comes after it).
+  const eval::EvaluationResult evaluation = eval::EvaluateDirectories(kClip, result_dir, {});
+  EXPECT_GT(evaluation.trajectory.fraction_posed, 0.5) << eval::Summary(evaluation);
+  EXPECT_LT(evaluation.trajectory.ate_rmse, 1.5) << eval::Summary(evaluation);
+  server.Signal(SIGTERM);
+  EXPECT_EQ(server.Wait(30), 0);
 }
 
 TEST(ServerE2E, FullJobOverHttpMatchesGroundTruth) {
