@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "api/stream_url.h"
+#include "engine/video/stream_source.h"
 #include "engine/core/error.h"
 
 namespace glam::api {

@@ -11,6 +11,7 @@
 #include "api/api_error.h"
 #include "api/ids.h"
 #include "api/stream_url.h"
+#include "engine/video/stream_source.h"
 #include "engine/core/error.h"
 #include "engine/core/logging.h"
 #include "engine/video/frame_source.h"

@@ -13,9 +13,6 @@ namespace glam::api {
 // without spaces or control characters.
 void CheckStreamUrl(const std::string& url);
 
-// `url` with the user information of its authority (user:password@) replaced by "***@" and
-// the values of query parameters named passphrase, password, pass, pwd, token, key or secret
-// by "***", for job JSON, names and logs: camera URLs often carry credentials.
-std::string RedactStreamUrl(const std::string& url);
+// RedactStreamUrl (engine/video/stream_source.h) shows such a URL without its credentials.
 
 }  // namespace glam::api

@@ -182,6 +182,7 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   // now) and has no sidecar.
   const bool stream = dynamic_cast<const StreamSource*>(source.get()) != nullptr;
   report.input_is_stream = stream;
+  if (stream) report.input = RedactStreamUrl(report.input);
   if (const auto* folder = dynamic_cast<const ImageFolderSource*>(source.get())) {
     report.photos_reordered_by_time = static_cast<std::int64_t>(folder->photos_reordered_by_time());
   }

@@ -39,6 +39,45 @@ int PipeDescriptor(const std::string& url) {
 
 std::string StreamUrl(const std::string& input) { return input == "-" ? "pipe:0" : input; }
 
+std::string RedactStreamUrl(const std::string& url) {
+  const std::size_t scheme_end = url.find("://");
+  if (scheme_end == std::string::npos) return url;
+  const std::size_t authority = scheme_end + 3;
+  const std::size_t authority_end = url.find_first_of("/?#", authority);
+  std::string out = url;
+  // user:password@host (an empty user part, udp://@:5004, is FFmpeg's "any address").
+  const std::size_t at = url.rfind('@', authority_end);
+  if (at != std::string::npos && at > authority) out = url.substr(0, authority) + "***" + url.substr(at);
+  // Query parameters that carry secrets (SRT's passphrase, tokens of HTTP and RTMP servers).
+  const std::size_t query = out.find('?');
+  if (query == std::string::npos) return out;
+  std::string redacted = out.substr(0, query + 1);
+  std::size_t begin = query + 1;
+  while (begin <= out.size()) {
+    std::size_t end = out.find_first_of("&#", begin);
+    if (end == std::string::npos) end = out.size();
+    std::string pair = out.substr(begin, end - begin);
+    const std::size_t eq = pair.find('=');
+    std::string key = pair.substr(0, eq);
+    for (char& c : key) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (eq != std::string::npos) {
+      for (const char* secret : {"passphrase", "password", "pass", "pwd", "token", "key", "secret"}) {
+        if (key == secret) pair = pair.substr(0, eq + 1) + "***";
+      }
+    }
+    redacted += pair;
+    if (end == out.size()) break;
+    if (out[end] == '#') {
+      redacted += out.substr(end);
+      break;
+    }
+    redacted += '&';
+    begin = end + 1;
+  }
+  return redacted;
+}
+
+
 bool StreamDropsFrames(const std::string& input, FrameSourceOptions::StreamDrop policy) {
   if (policy != FrameSourceOptions::StreamDrop::kAuto) return policy == FrameSourceOptions::StreamDrop::kDrop;
   const std::string scheme = Scheme(input);
@@ -49,9 +88,9 @@ bool StreamDropsFrames(const std::string& input, FrameSourceOptions::StreamDrop 
 }
 
 StreamSource::StreamSource(const std::string& input, const FrameSourceOptions& options)
-    : input_(input), options_(options) {
+    : url_(input), input_(RedactStreamUrl(input)), options_(options) {
   options_.Check();
-  drop_ = StreamDropsFrames(input, options_.stream_drop);
+  drop_ = StreamDropsFrames(url_, options_.stream_drop);
 
   VideoDecoderOptions decoder_options;
   decoder_options.format_options = options_.stream_options;
@@ -61,10 +100,11 @@ StreamSource::StreamSource(const std::string& input, const FrameSourceOptions& o
     decoder_options.format_options.emplace_back("rtsp_transport", "tcp");
   }
   decoder_options.interrupt = [this] { return ShouldInterrupt(); };
+  decoder_options.display_name = input_;
   // FFmpeg's pipe protocol blocks in read(2), where no interrupt reaches it (an idle pipe would
   // hold the reader, and the job, forever); non-blocking, its reads poll the interrupt every
   // millisecond. The flags are restored when the source closes (stdin may be shared).
-  if (const int fd = PipeDescriptor(StreamUrl(input_)); fd >= 0) {
+  if (const int fd = PipeDescriptor(StreamUrl(url_)); fd >= 0) {
     const int flags = fcntl(fd, F_GETFL);
     if (flags < 0 || fcntl(fd, F_SETFL, flags | O_NONBLOCK) < 0) {
       throw InputError(fmt::format("stream '{}': descriptor {} is not open", input_, fd));
@@ -75,7 +115,7 @@ StreamSource::StreamSource(const std::string& input, const FrameSourceOptions& o
   wait_start_.store(Clock::now().time_since_epoch().count());
   GLAM_LOG_INFO("opening stream '{}' (waiting up to {:.3g} s)", input_, options_.stream_open_timeout_s);
   try {
-    decoder_ = std::make_unique<VideoDecoder>(StreamUrl(input_), decoder_options);
+    decoder_ = std::make_unique<VideoDecoder>(StreamUrl(url_), decoder_options);
   } catch (const InputError& e) {
     if (options_.end_stream.IsCancelled()) {
       throw InputError(fmt::format("stream '{}' was ended before it opened", input_));

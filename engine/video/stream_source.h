@@ -38,6 +38,12 @@ namespace glam {
 // The URL FFmpeg is given for `input` ("-" is standard input, pipe:0).
 std::string StreamUrl(const std::string& input);
 
+// `url` with the user information of its authority (user:password@) replaced by "***@" and
+// the values of query parameters named passphrase, password, pass, pwd, token, key or secret
+// by "***": how logs, reports and the job JSON show a stream (camera URLs often carry
+// credentials). An empty user part (udp://@:5004, FFmpeg's "any address") stays.
+std::string RedactStreamUrl(const std::string& url);
+
 // Whether frames are dropped when mapping falls behind `input` (kAuto: for the live protocols
 // rtsp, rtsps, rtmp, rtmps, srt, udp and rtp).
 bool StreamDropsFrames(const std::string& input, FrameSourceOptions::StreamDrop policy);
@@ -91,7 +97,8 @@ class StreamSource : public FrameSource {
     ~NonBlockingPipe();
   };
 
-  std::string input_;
+  std::string url_;    // what FFmpeg opens
+  std::string input_;  // how messages name it (RedactStreamUrl)
   FrameSourceOptions options_;
   NonBlockingPipe pipe_;
   FrameSourceInfo info_;

@@ -96,6 +96,7 @@ void VideoDecoderOptions::Check() const {
 
 struct VideoDecoder::Impl {
   std::filesystem::path path;
+  std::string name;  // how messages name the input (VideoDecoderOptions::display_name)
   int threads = 0;
   std::vector<std::pair<std::string, std::string>> format_options;
   std::function<bool()> interrupt;
@@ -134,7 +135,7 @@ bool VideoDecoder::Impl::DecodeFrame() {
     if (received == 0) return true;
     if (received == AVERROR_EOF) return false;
     if (received != AVERROR(EAGAIN)) {
-      GLAM_LOG_DEBUG("'{}': decoder error {}", path.string(), AvErrorText(received));
+      GLAM_LOG_DEBUG("'{}': decoder error {}", name, AvErrorText(received));
     }
     if (draining) return false;  // nothing more to give it
     // The decoder wants input: the next packet of our stream, skipping those it rejects
@@ -143,7 +144,7 @@ bool VideoDecoder::Impl::DecodeFrame() {
       const int read = av_read_frame(format.get(), packet.get());
       if (read < 0) {
         if (read != AVERROR_EOF) {
-          GLAM_LOG_DEBUG("'{}': read stopped: {}", path.string(), AvErrorText(read));
+          GLAM_LOG_DEBUG("'{}': read stopped: {}", name, AvErrorText(read));
         }
         avcodec_send_packet(codec.get(), nullptr);  // flush the frames still inside
         draining = true;
@@ -156,7 +157,7 @@ bool VideoDecoder::Impl::DecodeFrame() {
       const int sent = avcodec_send_packet(codec.get(), packet.get());
       av_packet_unref(packet.get());
       if (sent < 0) {
-        GLAM_LOG_DEBUG("'{}': packet skipped: {}", path.string(), AvErrorText(sent));
+        GLAM_LOG_DEBUG("'{}': packet skipped: {}", name, AvErrorText(sent));
         continue;
       }
       break;
@@ -208,29 +209,29 @@ void VideoDecoder::Impl::Open() {
   const int opened = avformat_open_input(&raw_format, path.c_str(), nullptr, &dictionary);
   const AVDictionaryEntry* unused = nullptr;
   while ((unused = av_dict_get(dictionary, "", unused, AV_DICT_IGNORE_SUFFIX)) != nullptr) {
-    GLAM_LOG_WARN("'{}': FFmpeg option {}={} not recognised; ignored", path.string(), unused->key,
+    GLAM_LOG_WARN("'{}': FFmpeg option {}={} not recognised; ignored", name, unused->key,
                   unused->value);
   }
   av_dict_free(&dictionary);
   if (opened < 0) {
     throw InputError(fmt::format("cannot open '{}' as a video ({}): not a video file, or a "
                                  "container FFmpeg cannot read",
-                                 path.string(), AvErrorText(opened)));
+                                 name, AvErrorText(opened)));
   }
   format.reset(raw_format);
   if (avformat_find_stream_info(format.get(), nullptr) < 0) {
     throw InputError(fmt::format("cannot read the streams of '{}': not a video file",
-                                 path.string()));
+                                 name));
   }
   const AVCodec* decoder = nullptr;
   const int stream_index =
       av_find_best_stream(format.get(), AVMEDIA_TYPE_VIDEO, -1, -1, &decoder, 0);
   if (stream_index == AVERROR_DECODER_NOT_FOUND) {
     throw InputError(fmt::format("'{}' has a video stream in a codec FFmpeg cannot decode here",
-                                 path.string()));
+                                 name));
   }
   if (stream_index < 0 || decoder == nullptr) {
-    throw InputError(fmt::format("'{}' has no video stream", path.string()));
+    throw InputError(fmt::format("'{}' has no video stream", name));
   }
   stream = format->streams[stream_index];
   // Only our stream's packets are demuxed in full; the others (audio, telemetry) are dropped.
@@ -241,13 +242,13 @@ void VideoDecoder::Impl::Open() {
   codec.reset(avcodec_alloc_context3(decoder));
   if (!codec) throw EnvironmentError("out of memory allocating a video decoder");
   if (avcodec_parameters_to_context(codec.get(), stream->codecpar) < 0) {
-    throw InputError(fmt::format("'{}': unusable video stream parameters", path.string()));
+    throw InputError(fmt::format("'{}': unusable video stream parameters", name));
   }
   codec->thread_count = threads;
   const int codec_opened = avcodec_open2(codec.get(), decoder, nullptr);
   if (codec_opened < 0) {
     throw InputError(fmt::format("cannot start the {} decoder for '{}': {}", decoder->name,
-                                 path.string(), AvErrorText(codec_opened)));
+                                 name, AvErrorText(codec_opened)));
   }
 
   // The display matrix holds the counter-clockwise rotation of the stored picture.
@@ -268,6 +269,7 @@ VideoDecoder::VideoDecoder(const std::filesystem::path& path, const VideoDecoder
   InstallLibavLogCallback();
   Impl& d = *impl_;
   d.path = path;
+  d.name = options.display_name.empty() ? path.string() : options.display_name;
   d.threads = options.threads;
   d.format_options = options.format_options;
   d.interrupt = options.interrupt;
@@ -341,7 +343,7 @@ void VideoDecoder::Retrieve(cv::Size size, cv::Mat* bgr) {
   SwsContext* sws = d.sws.get();
   if (sws == nullptr) {
     throw InputError(fmt::format("'{}': cannot convert {} frames of {}x{} to BGR",
-                                       d.path.string(),
+                                       d.name,
                                        av_get_pix_fmt_name(source_format) != nullptr
                                            ? av_get_pix_fmt_name(source_format)
                                            : "unknown",
@@ -393,7 +395,7 @@ bool VideoDecoder::Seek(int64_t target) {
 
   // No usable timestamps, or no seek lands at or before the target: open the file again and
   // count frames from the start (slow for a far target, but exact).
-  GLAM_LOG_DEBUG("'{}': seeking to frame {} by decoding from the start", d.path.string(), target);
+  GLAM_LOG_DEBUG("'{}': seeking to frame {} by decoding from the start", d.name, target);
   d.Open();
   if (!d.DecodeFrame()) {
     index_ = -1;

@@ -44,6 +44,9 @@ struct VideoDecoderOptions {
   // aborts the wait, and the stream then ends as if the input had ended. Empty: never.
   // Network streams need it: a sender that goes silent would otherwise block a read forever.
   std::function<bool()> interrupt;
+  // How log lines and error messages name the input; empty = its path. A stream URL's
+  // credentials must not reach logs (stream_source.h passes the redacted URL).
+  std::string display_name;
 
   void Check() const;  // throws InputError
 };

@@ -1,5 +1,6 @@
 #include "api/job_json.h"
 #include "api/stream_url.h"
+#include "engine/video/stream_source.h"
 #include "api/api_error.h"
 
 #include <gtest/gtest.h>

@@ -271,12 +271,14 @@ TEST_F(StreamSourceTest, GivesUpWhenNoSenderConnects) {
   FrameSourceOptions options = Options();
   options.stream_open_timeout_s = 0.5;
   const auto start = Clock::now();
-  const std::string url = "tcp://127.0.0.1:" + std::to_string(FreePort()) + "?listen=1";
+  // Credentials in the URL never reach a message (or a log line).
+  const std::string url = "tcp://viewer:hunter2@127.0.0.1:" + std::to_string(FreePort()) + "?listen=1";
   try {
     OpenFrameSource(url, options);
     ADD_FAILURE() << "opened " << url;
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("cannot open stream"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("cannot open stream 'tcp://***@127.0.0.1:"), std::string::npos) << e.what();
+    EXPECT_EQ(std::string(e.what()).find("hunter2"), std::string::npos) << e.what();
   }
   EXPECT_LT(SecondsSince(start), 5.0);
 }
