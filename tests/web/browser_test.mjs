@@ -220,6 +220,14 @@ async function main() {
 
     // 1. Upload through the page (the token arrives as ?token= and is kept by the page).
     await page.goto(`${base}/?token=${TOKEN}`);
+    // A live stream URL goes to the API as a stream job; this server was started without
+    // --allow-streams, so the page shows the server's refusal and no job is created.
+    await page.fill('#upload-form input[name=stream_url]', 'rtsp://127.0.0.1:9/live');
+    await page.click('#upload-form button[type=submit]');
+    await page.waitForFunction(() => /does not map live streams/.test(document.querySelector('#upload-status').textContent),
+      null, { timeout: 10_000 });
+    check(!/[?&]job=/.test(page.url()), 'a stream job on a server without --allow-streams was refused (403 shown in the form)');
+    await page.fill('#upload-form input[name=stream_url]', '');
     await page.setInputFiles('#video-file', opt.clip);
     // Its GPS track, so that the map comes out georeferenced (metres, east-north-up).
     await page.setInputFiles('#upload-form input[name=telemetry]', {

@@ -85,6 +85,21 @@ export async function cancelJob(id) {
   return (await apiFetch(apiUrl(`jobs/${encodeURIComponent(id)}/cancel`), { method: 'POST' })).json();
 }
 
+// Ends a running live-stream job's input; the job completes with the map of what arrived.
+export async function finishJob(id) {
+  return (await apiFetch(apiUrl(`jobs/${encodeURIComponent(id)}/finish`), { method: 'POST' })).json();
+}
+
+// A live-stream job (servers started with --allow-streams): the URL and the job options.
+export async function createStreamJob(streamUrl, options) {
+  const response = await apiFetch(apiUrl('jobs'), {
+    method: 'POST',
+    headers: { 'Content-Type': 'application/json' },
+    body: JSON.stringify({ stream_url: streamUrl, options }),
+  });
+  return response.json();
+}
+
 export async function deleteJob(id) {
   await apiFetch(apiUrl(`jobs/${encodeURIComponent(id)}`), { method: 'DELETE' });
 }

@@ -2,7 +2,7 @@
 // GET /jobs (one request every 2 s is cheaper for the server than an event stream per job,
 // and event streams are a limited resource: --max-sse-clients).
 
-import { apiUrl, cancelJob, deleteJob, listJobs, withToken } from './api.js';
+import { apiUrl, cancelJob, deleteJob, finishJob, listJobs, withToken } from './api.js';
 import { escapeHtml, formatCount, formatDuration, jobFraction } from './format.js';
 
 const DOWNLOADS = [
@@ -52,6 +52,8 @@ function row(job) {
     <td>${formatCount(p.points)}</td>
     <td class="actions">
       <a class="button" href="?job=${encodeURIComponent(job.id)}">view</a>
+      ${job.state === 'running' && job.input && job.input.stream_url
+    ? '<button data-action="finish" title="End the live stream here and finish the map">finish</button>' : ''}
       ${active ? '<button data-action="cancel">cancel</button>' : ''}
       <button data-action="delete">delete</button>
       ${downloads}
@@ -84,6 +86,7 @@ export function setupJobList(root) {
     button.disabled = true;
     try {
       if (action === 'cancel') await cancelJob(id);
+      else if (action === 'finish') await finishJob(id);
       else await deleteJob(id);
     } catch (err) {
       status.textContent = `${action} failed: ${err.message}`;

@@ -1,10 +1,11 @@
-// Upload form: a video (or a set of photos) chosen or dropped, optional name / focal length /
+// Upload form: a video (or a set of photos) chosen or dropped, or a live stream's URL; optional
+// name / focal length /
 // intrinsics.json and the advanced job options (numbers and ticked boxes; an empty field or an
 // unticked box sends nothing, so the server's defaults apply), sent with a progress bar.
 // Options follow docs/api.md "Creating a job": `focal` (pixels at the original resolution) or
 // `intrinsics` (an intrinsics.json object); not both.
 
-import { uploadPhotos, uploadVideo } from './api.js';
+import { createStreamJob, uploadPhotos, uploadVideo } from './api.js';
 
 const isImage = (f) => f.type.startsWith('image/') || /\.(jpe?g|png|tiff?|bmp|webp)$/i.test(f.name);
 
@@ -113,15 +114,34 @@ export function setupUploadPage(root, onCreated) {
 
   form.addEventListener('submit', async (e) => {
     e.preventDefault();
+    const streamUrl = form.elements.stream_url.value.trim();
     let input;
     try {
       input = classify(chosen());
+      if (input && streamUrl) throw new Error('choose a file or give a stream URL, not both');
     } catch (err) {
       status.textContent = `Upload failed: ${err.message}`;
       return;
     }
+    if (streamUrl) {
+      button.disabled = true;
+      try {
+        const options = await collectOptions(form);
+        if (form.elements.telemetry.files[0]) throw new Error('a GPS track goes with a video file, not a stream');
+        status.textContent = 'Creating the stream job…';
+        const job = await createStreamJob(streamUrl, options);
+        status.textContent = `Job ${job.id} created (${job.state}): mapping the stream as it arrives.`;
+        onCreated(job);
+        form.reset();
+      } catch (err) {
+        status.textContent = `Stream job failed: ${err.message}`;
+      } finally {
+        button.disabled = false;
+      }
+      return;
+    }
     if (!input) {
-      status.textContent = 'Choose or drop a video (or photos) first.';
+      status.textContent = 'Choose or drop a video (or photos), or give a live stream URL, first.';
       return;
     }
     const label = input.video ? input.video.name
