@@ -145,7 +145,8 @@ StreamSource::StreamSource(const std::string& input, const FrameSourceOptions& o
       std::max(2.0, std::min(std::round(options_.stream_buffer_s * info_.fps), by_memory)));
 
   Frame first;
-  first.index = decoder_->index();
+  first.index = NumberFrame();
+  next_wanted_ = first.index + options_.stride;
   first.timestamp_s = static_cast<double>(first.index) / info_.fps;
   first.original_size = info_.original_size;
   decoder_->Retrieve(info_.processing_size, &first.bgr);  // a format we cannot convert fails here
@@ -217,8 +218,9 @@ void StreamSource::ReadLoop() {
         }
         break;
       }
-      const int64_t index = decoder_->index();
-      if (index % options_.stride != 0) continue;
+      const int64_t index = NumberFrame();
+      if (index < next_wanted_) continue;  // --stride
+      next_wanted_ = index + options_.stride;
       Frame frame;
       frame.index = index;  // in the stream; Push() numbers it as SeekTo() asked
       frame.original_size = decoder_->display_size();
@@ -237,6 +239,23 @@ void StreamSource::ReadLoop() {
     finished_ = true;
   }
   changed_.notify_all();
+}
+
+int64_t StreamSource::NumberFrame() {
+  // Up to this many frames of a jump ahead in the timestamps are frames lost in transit; more
+  // is a sender that restarted its clock.
+  const int64_t max_gap = static_cast<int64_t>(std::ceil(kMaxTimestampGapS * info_.fps));
+  int64_t number = last_number_ + 1;
+  if (const std::optional<double> t = decoder_->seconds_since_first()) {
+    const int64_t by_time = std::llround(*t * info_.fps);
+    if (by_time + time_anchor_ > last_number_ && by_time + time_anchor_ - last_number_ <= max_gap) {
+      number = by_time + time_anchor_;
+    } else {
+      time_anchor_ = number - by_time;  // a discontinuity: go on from the last number
+    }
+  }
+  last_number_ = number;
+  return number;
 }
 
 std::optional<Frame> StreamSource::Next() {

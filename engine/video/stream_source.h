@@ -7,9 +7,10 @@
 // grey over the damaged frames) and RTSP/RTMP servers drop a client that lags too far. So one
 // thread only reads and decodes, into a buffer of FrameSourceOptions::stream_buffer_s seconds;
 // when mapping falls behind and the buffer is full, whole frames are dropped (the oldest
-// buffered one: the map keeps following the newest frames), never parts of frames. Frames keep
-// their position in the stream as index (t = index / fps), so a dropped frame is a gap in the
-// trajectory, as with --stride. Pipes and HTTP files wait for the reader instead (kWait).
+// buffered one: the map keeps following the newest frames), never parts of frames. Frames are
+// numbered by their presentation time (index = t x fps from the first frame), so a frame
+// dropped here or lost in transit is a gap in the trajectory, as with --stride, and t = index /
+// fps stays the stream's time. Pipes and HTTP files wait for the reader instead (kWait).
 //
 // What a stream cannot do, and what follows: it has no frame count (FrameSourceInfo::frame_count
 // = -1: progress without a total) and cannot seek (a run resumed on a stream maps what arrives
@@ -73,6 +74,10 @@ class StreamSource : public FrameSource {
   int64_t frames_dropped() const override;
 
   bool drops_frames() const { return drop_; }
+  // A jump ahead in the stream's timestamps up to this long is frames lost in transit (they
+  // become a gap in the frame numbers); longer, or back in time, is a discontinuity (a sender
+  // that restarted its clock), after which numbering goes on from the last frame.
+  static constexpr double kMaxTimestampGapS = 10.0;
   // Frames the buffer holds at most.
   std::size_t buffer_capacity() const { return capacity_; }
 
@@ -80,6 +85,11 @@ class StreamSource : public FrameSource {
   using Clock = std::chrono::steady_clock;
 
   void ReadLoop();
+  // The number of the frame just grabbed: by its presentation time (index = t x fps), so that
+  // frames lost in transit leave a gap and t = index / fps stays the stream's time; one more
+  // than the last number when the timestamps are missing or discontinuous. Reader thread (and
+  // the constructor) only.
+  int64_t NumberFrame();
   // FFmpeg's interrupt callback: closing, ended by the user, or waiting too long.
   bool ShouldInterrupt() const;
   // Appends a decoded frame, dropping the oldest or waiting when the buffer is full; false when
@@ -119,6 +129,9 @@ class StreamSource : public FrameSource {
   std::exception_ptr error_;
   int64_t dropped_ = 0;
   int64_t delivered_ = 0;
+  int64_t last_number_ = -1;  // NumberFrame()'s state (reader thread)
+  int64_t time_anchor_ = 0;
+  int64_t next_wanted_ = 0;   // the next number --stride delivers (reader thread)
   int64_t next_index_ = 0;    // index of the next frame Next() returns, if nothing is dropped
   int64_t index_offset_ = 0;  // added to the stream's own frame numbers (SeekTo before Next)
   std::thread reader_;

@@ -314,6 +314,14 @@ bool VideoDecoder::Grab() {
 
 cv::Size VideoDecoder::display_size() const { return impl_->DisplaySize(); }
 
+std::optional<double> VideoDecoder::seconds_since_first() const {
+  const Impl& d = *impl_;
+  if (index_ < 0 || d.first_pts == AV_NOPTS_VALUE) return std::nullopt;
+  const int64_t pts = d.FrameTimestamp();
+  if (pts == AV_NOPTS_VALUE) return std::nullopt;
+  return static_cast<double>(pts - d.first_pts) * av_q2d(d.stream->time_base);
+}
+
 void VideoDecoder::Retrieve(cv::Size size, cv::Mat* bgr) {
   Impl& d = *impl_;
   GLAM_CHECK(index_ >= 0 && d.frame->width > 0, "Retrieve() before a successful Grab()");

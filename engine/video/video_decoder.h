@@ -23,6 +23,7 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -70,6 +71,10 @@ class VideoDecoder {
   bool Grab();
   // Index of the frame the last Grab() produced (0 for the first frame of the stream).
   int64_t index() const { return index_; }
+  // Presentation time of the last grabbed frame in seconds after the first frame's, from the
+  // stream's timestamps; nullopt when either has none. Live streams use it to number frames
+  // by time, so that frames lost in transit leave gaps instead of shifting the later ones.
+  std::optional<double> seconds_since_first() const;
   // Size of the grabbed frame as displayed (after the stream's rotation); empty before Grab().
   cv::Size display_size() const;
   // The grabbed frame as 8-bit BGR scaled to `size` (display orientation), area-filtered when

@@ -173,6 +173,50 @@ TEST_F(StreamSourceTest, SeekingBeforeTheFirstFrameNumbersTheStreamFromThere) {
   EXPECT_EQ(expected, 1000 + kFrames);
 }
 
+TEST_F(StreamSourceTest, FramesLostInTransitLeaveAGapInTheNumbers) {
+  // Frames 30-39 never arrive (the timestamps of the others are kept): the frames after the
+  // gap keep their numbers, so their time is right.
+  const fs::path lossy = dir_ / "lossy.ts";
+  ASSERT_TRUE(testing::TranscodeWithFfmpeg(
+      clip_, lossy,
+      "-vf \"select='not(between(n\\,30\\,39))'\" -fps_mode passthrough -c:v libx264 -preset ultrafast "
+      "-pix_fmt yuv420p -g 10 -f mpegts"));
+  PipeFeeder feeder(lossy);
+  auto source = OpenFrameSource(feeder.url(), Options());
+  std::vector<int64_t> indices;
+  while (auto frame = source->Next()) {
+    EXPECT_EQ(DecodeIndex(frame->bgr, kFrames), frame->index);
+    EXPECT_DOUBLE_EQ(frame->timestamp_s, frame->index / kFps);
+    indices.push_back(frame->index);
+  }
+  ASSERT_EQ(indices.size(), static_cast<std::size_t>(kFrames - 10));
+  EXPECT_EQ(indices[29], 29);
+  EXPECT_EQ(indices[30], 40);
+  EXPECT_EQ(indices.back(), kFrames - 1);
+}
+
+TEST_F(StreamSourceTest, ASenderThatRestartsItsClockIsNumberedOn) {
+  // The clip sent twice, its timestamps starting again at 0 the second time (a restarted
+  // encoder): the second pass is numbered after the first, not on top of it.
+  const fs::path twice = dir_ / "twice.ts";
+  {
+    std::ofstream out(twice, std::ios::binary);
+    for (int pass = 0; pass < 2; ++pass) {
+      std::ifstream in(clip_, std::ios::binary);
+      out << in.rdbuf();
+    }
+  }
+  PipeFeeder feeder(twice);
+  auto source = OpenFrameSource(feeder.url(), Options());
+  int64_t expected = 0;
+  while (auto frame = source->Next()) {
+    ASSERT_EQ(frame->index, expected);
+    EXPECT_EQ(DecodeIndex(frame->bgr, kFrames), expected % kFrames);
+    ++expected;
+  }
+  EXPECT_EQ(expected, 2 * kFrames);
+}
+
 TEST_F(StreamSourceTest, StrideKeepsTheStreamIndices) {
   PipeFeeder feeder(clip_);
   FrameSourceOptions options = Options();
