@@ -118,7 +118,8 @@ class StreamSource : public FrameSource {
 
   std::atomic<bool> closing_{false};
   std::atomic<bool> opened_{false};
-  mutable std::atomic<bool> timed_out_{false};  // an I/O wait hit its time limit
+  mutable std::atomic<bool> timed_out_{false};    // an I/O wait hit its time limit
+  mutable std::atomic<bool> interrupted_{false};  // ShouldInterrupt() said yes once
   // Start of the current I/O wait (steady clock ticks): the open, or the current Grab().
   std::atomic<Clock::rep> wait_start_{0};
 

@@ -311,6 +311,33 @@ TEST_F(StreamSourceTest, TheEndRequestEndsTheStreamAndKeepsTheBufferedFrames) {
   EXPECT_EQ(source->frames_dropped(), 0);
 }
 
+TEST_F(StreamSourceTest, FramesDeliveredAroundAnEndRequestAreIntact) {
+  // Ending a stream cuts a read off mid-packet; what the source delivers must still be whole
+  // frames, pixel for pixel those of the file. Ended at several points of the stream.
+  std::vector<cv::Mat> truth;
+  {
+    FrameSourceOptions file_options;
+    auto file = OpenFrameSource(clip_, file_options);
+    while (auto frame = file->Next()) truth.push_back(frame->bgr.clone());
+  }
+  ASSERT_EQ(truth.size(), static_cast<std::size_t>(kFrames));
+  for (const int end_after : {5, 23, 41, 77}) {
+    PipeFeeder feeder(clip_, SIZE_MAX, /*hold_open=*/true);
+    FrameSourceOptions options = Options();
+    options.stream_buffer_s = 0.2;  // 5 frames: the reader is mid-stream when the request comes
+    auto source = OpenFrameSource(feeder.url(), options);
+    int frames = 0;
+    while (auto frame = source->Next()) {
+      ASSERT_LT(frame->index, kFrames);
+      EXPECT_EQ(cv::norm(frame->bgr, truth[static_cast<std::size_t>(frame->index)], cv::NORM_INF), 0.0)
+          << "frame " << frame->index << " of a stream ended after " << end_after;
+      if (++frames == end_after) options.end_stream.Cancel();
+    }
+    // The request is prompt: the buffer's frames and the one being decoded, no more.
+    EXPECT_LE(frames, end_after + 5 + 1) << "ended after " << end_after;
+  }
+}
+
 TEST_F(StreamSourceTest, GivesUpWhenNoSenderConnects) {
   FrameSourceOptions options = Options();
   options.stream_open_timeout_s = 0.5;
