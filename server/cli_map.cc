@@ -174,7 +174,7 @@ void RegisterMapCommand(CLI::App& app) {
   auto args = std::make_shared<MapArgs>();
   CLI::App* cmd = app.add_subcommand(
       "map", "Build submaps, align them (loop closure) and write trajectory.tum, points.ply, "
-             "report.json and graph.json from a video or image folder (parts of the flight that "
+             "report.json and graph.json from a video, image folder or live stream (parts of the flight that "
              "cannot be linked to the map: parts/<n>/trajectory.tum and points.ply)");
   cmd->add_option("input", args->input,
                   "Video file (anything FFmpeg decodes: MP4/MOV/MKV/TS/AVI, H.264/H.265/VP9/AV1/ProRes), "

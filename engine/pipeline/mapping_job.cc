@@ -370,6 +370,9 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   }
   stop.store(true);
   queue.Close();
+  // A cancelled run's decoder thread may wait for a live stream's next frame; the input is
+  // abandoned (a finished input has nothing left to abandon).
+  if (error) source->Abort();
   decoder.join();
   if (error) {
     alignment.Abort();

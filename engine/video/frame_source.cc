@@ -26,13 +26,17 @@ void FrameSourceOptions::Check() const {
   }
 }
 
+std::string UrlScheme(const std::string& input) {
+  const std::size_t colon = input.find("://");
+  std::string scheme = colon == std::string::npos ? std::string() : input.substr(0, colon);
+  for (char& c : scheme) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return scheme;
+}
+
 bool IsStreamInput(const std::string& input) {
   if (input == "-") return true;
   if (input.rfind("pipe:", 0) == 0) return true;
-  const std::size_t colon = input.find("://");
-  if (colon == std::string::npos) return false;
-  std::string scheme = input.substr(0, colon);
-  for (char& c : scheme) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  const std::string scheme = UrlScheme(input);
   for (const char* known : {"rtsp", "rtsps", "rtmp", "rtmps", "srt", "udp", "rtp", "tcp", "http", "https"}) {
     if (scheme == known) return true;
   }

@@ -107,7 +107,15 @@ class FrameSource {
   // Frames decoded but discarded because mapping fell behind a live stream (stream_source.h);
   // 0 for files and folders, which wait for the reader.
   virtual int64_t frames_dropped() const { return 0; }
+
+  // The input is abandoned (a cancelled run): a Next() waiting for a live stream's next frame
+  // returns nullopt at once, and so does every later one. Thread-safe. Files and folders never
+  // wait, so for them it does nothing.
+  virtual void Abort() {}
 };
+
+// The lower-case scheme of a URL ("rtsp" for "RTSP://cam/live"); empty without "://".
+std::string UrlScheme(const std::string& input);
 
 // True when `input` names a stream for FFmpeg rather than a file or folder: a URL with a
 // network protocol FFmpeg reads (rtsp, rtsps, rtmp, rtmps, srt, udp, rtp, tcp, http, https),

@@ -14,13 +14,6 @@
 namespace glam {
 namespace {
 
-std::string Scheme(const std::string& input) {
-  const std::size_t colon = input.find("://");
-  std::string scheme = colon == std::string::npos ? std::string() : input.substr(0, colon);
-  for (char& c : scheme) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return scheme;
-}
-
 bool HasOption(const std::vector<std::pair<std::string, std::string>>& options, const std::string& key) {
   return std::any_of(options.begin(), options.end(), [&](const auto& o) { return o.first == key; });
 }
@@ -77,10 +70,9 @@ std::string RedactStreamUrl(const std::string& url) {
   return redacted;
 }
 
-
 bool StreamDropsFrames(const std::string& input, FrameSourceOptions::StreamDrop policy) {
   if (policy != FrameSourceOptions::StreamDrop::kAuto) return policy == FrameSourceOptions::StreamDrop::kDrop;
-  const std::string scheme = Scheme(input);
+  const std::string scheme = UrlScheme(input);
   for (const char* live : {"rtsp", "rtsps", "rtmp", "rtmps", "srt", "udp", "rtp"}) {
     if (scheme == live) return true;
   }
@@ -95,7 +87,7 @@ StreamSource::StreamSource(const std::string& input, const FrameSourceOptions& o
   VideoDecoderOptions decoder_options;
   decoder_options.format_options = options_.stream_options;
   // RTSP over UDP loses packets on any busy link, and a lost packet damages a whole frame.
-  if ((Scheme(input) == "rtsp" || Scheme(input) == "rtsps") &&
+  if ((UrlScheme(input) == "rtsp" || UrlScheme(input) == "rtsps") &&
       !HasOption(decoder_options.format_options, "rtsp_transport")) {
     decoder_options.format_options.emplace_back("rtsp_transport", "tcp");
   }
@@ -163,9 +155,18 @@ StreamSource::StreamSource(const std::string& input, const FrameSourceOptions& o
 }
 
 StreamSource::~StreamSource() {
-  closing_.store(true);
-  changed_.notify_all();
+  Abort();
   if (reader_.joinable()) reader_.join();
+}
+
+void StreamSource::Abort() {
+  {
+    // Under the mutex: a thread between checking its wait's condition and blocking must not
+    // miss the notification.
+    std::lock_guard<std::mutex> lock(mutex_);
+    closing_.store(true);
+  }
+  changed_.notify_all();
 }
 
 StreamSource::NonBlockingPipe::~NonBlockingPipe() {
@@ -272,7 +273,8 @@ int64_t StreamSource::NumberFrame() {
 
 std::optional<Frame> StreamSource::Next() {
   std::unique_lock<std::mutex> lock(mutex_);
-  changed_.wait(lock, [this] { return !buffer_.empty() || finished_; });
+  changed_.wait(lock, [this] { return !buffer_.empty() || finished_ || closing_.load(); });
+  if (closing_.load()) return std::nullopt;  // Abort()
   if (buffer_.empty()) {
     if (error_) std::rethrow_exception(error_);
     return std::nullopt;

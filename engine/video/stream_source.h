@@ -72,6 +72,8 @@ class StreamSource : public FrameSource {
   int64_t frames_delivered() const override;
   bool ended_early() const override { return false; }
   int64_t frames_dropped() const override;
+  // Stops the reader (an I/O wait is interrupted at once); Next() returns nullopt from now on.
+  void Abort() override;
 
   bool drops_frames() const { return drop_; }
   // A jump ahead in the stream's timestamps up to this long is frames lost in transit (they

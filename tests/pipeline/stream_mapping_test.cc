@@ -9,6 +9,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <fstream>
@@ -134,6 +135,31 @@ TEST_F(StreamMapping, AResumedStreamKeepsItsSubmapsAndNumbersNewFramesAfterThem)
   }
   EXPECT_GE(before, mapped_until * 9 / 10);
   EXPECT_GE(after, kClipFrames * 9 / 10);
+}
+
+TEST_F(StreamMapping, CancelWhileASilentStreamIsAwaitedReturnsPromptly) {
+  // A third of the stream, then the sender stays connected and silent (its stall timeout is
+  // far away): a cancel must not wait for the next frame.
+  testing::PipeFeeder feeder(stream_, static_cast<std::size_t>(fs::file_size(stream_) / 3), /*hold_open=*/true);
+  options_.source.stream_stall_timeout_s = 600;
+  CancellationToken cancel;
+  std::atomic<std::int64_t> done{0};
+  std::chrono::steady_clock::time_point cancelled_at;
+  std::thread canceller([&] {
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    while (done.load() < 30 && std::chrono::steady_clock::now() < deadline) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    std::this_thread::sleep_for(std::chrono::seconds(2));  // mapping catches up, then waits
+    cancelled_at = std::chrono::steady_clock::now();
+    cancel.Cancel();
+  });
+  const auto progress = [&done](const MappingProgress& p) { done.store(p.frames_done); };
+  EXPECT_THROW(RunMapping(feeder.url(), dir_ / "out", options_, progress, cancel), Cancelled);
+  const auto returned_at = std::chrono::steady_clock::now();
+  canceller.join();
+  EXPECT_GE(done.load(), 30);
+  EXPECT_LT(std::chrono::duration<double>(returned_at - cancelled_at).count(), 3.0);
 }
 
 std::string ReadText(const fs::path& path) {
