@@ -11,10 +11,10 @@
 #include "api/api_error.h"
 #include "api/ids.h"
 #include "api/stream_url.h"
-#include "engine/video/stream_source.h"
 #include "engine/core/error.h"
 #include "engine/core/logging.h"
 #include "engine/video/frame_source.h"
+#include "engine/video/stream_source.h"
 
 namespace glam::api {
 namespace {
@@ -190,17 +190,9 @@ Job JobService::CreateJob(const fs::path& upload, const std::string& original_na
     input_info["size_bytes"] = static_cast<std::int64_t>(fs::file_size(upload, ec));
   }
 
-  Job job;
-  do {
-    job.id = NewJobId();
-  } while (fs::exists(JobDir(job.id)) || store_->Get(job.id));
-  job.name = job_options.name.empty() ? DisplayName(original_name) : job_options.name;
-  job.state = JobState::kQueued;
-  job.created_ms = job.updated_ms = NowMs();
-  job.options = ToJson(job_options);
+  Job job = NewQueuedJob(job_options.name.empty() ? DisplayName(original_name) : job_options.name, job_options);
   job.input_file = photos ? std::string(kImagesFolder) : "input." + SafeExtension(original_name);
   job.input_info = input_info;
-  job.progress.stage = "queued";
 
   const fs::path dir = JobDir(job.id);
   fs::create_directories(dir, ec);
@@ -217,15 +209,32 @@ Job JobService::CreateJob(const fs::path& upload, const std::string& original_na
     RemoveQuietly(dir);
     throw EnvironmentError(fmt::format("cannot store the upload: {}", ec.message()));
   }
+  Queue(job);
+  GLAM_LOG_INFO("job {} created ({}, {} bytes)", job.id, job.name,
+                input_info["size_bytes"].get<std::int64_t>());
+  return Get(job.id);
+}
+
+Job JobService::NewQueuedJob(const std::string& name, const JobOptions& job_options) const {
+  Job job;
+  do {
+    job.id = NewJobId();
+  } while (fs::exists(JobDir(job.id)) || store_->Get(job.id));
+  job.name = name;
+  job.state = JobState::kQueued;
+  job.created_ms = job.updated_ms = NowMs();
+  job.options = ToJson(job_options);
+  job.progress.stage = "queued";
+  return job;
+}
+
+void JobService::Queue(Job& job) {
   {
     std::lock_guard lock(mutex_);
     store_->Insert(job);
     EmitLocked(job, "state", {{"state", "queued"}, {"error", nullptr}});
   }
   runner_->Enqueue(job.id);
-  GLAM_LOG_INFO("job {} created ({}, {} bytes)", job.id, job.name,
-                input_info["size_bytes"].get<std::int64_t>());
-  return Get(job.id);
 }
 
 Job JobService::CreateStreamJob(const std::string& url, const JobOptions& job_options) {
@@ -235,25 +244,12 @@ Job JobService::CreateStreamJob(const std::string& url, const JobOptions& job_op
   }
   CheckStreamUrl(url);
   CheckCanQueue();
-  Job job;
-  do {
-    job.id = NewJobId();
-  } while (fs::exists(JobDir(job.id)) || store_->Get(job.id));
-  job.name = job_options.name.empty() ? RedactStreamUrl(url) : job_options.name;
-  job.state = JobState::kQueued;
-  job.created_ms = job.updated_ms = NowMs();
-  job.options = ToJson(job_options);
+  Job job = NewQueuedJob(job_options.name.empty() ? RedactStreamUrl(url) : job_options.name, job_options);
   job.input_info = {{"stream_url", url}};  // shown redacted (JobToJson)
-  job.progress.stage = "queued";
   std::error_code ec;
   fs::create_directories(JobDir(job.id), ec);
   if (ec) throw EnvironmentError(fmt::format("cannot create the job directory: {}", ec.message()));
-  {
-    std::lock_guard lock(mutex_);
-    store_->Insert(job);
-    EmitLocked(job, "state", {{"state", "queued"}, {"error", nullptr}});
-  }
-  runner_->Enqueue(job.id);
+  Queue(job);
   GLAM_LOG_INFO("job {} created (live stream {})", job.id, RedactStreamUrl(url));
   return Get(job.id);
 }

@@ -164,6 +164,10 @@ class JobService {
   };
 
   void Recover();
+  // A queued job record under a fresh id (no row, no directory yet) with `name` and options.
+  Job NewQueuedJob(const std::string& name, const JobOptions& job_options) const;
+  // Inserts the job (its directory holds its input), emits its first state event, queues it.
+  void Queue(Job& job);
   void RunJob(const std::string& id, const CancellationToken& cancel);
   void OnProgress(const std::string& id, const MappingProgress& progress);
   // Under mutex_: assigns the next event id, persists it unless it is a progress event.
