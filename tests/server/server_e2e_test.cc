@@ -3,10 +3,7 @@
 // and restart mid-run, kill -9 mid-job + restart on the same data directory (the job is
 // listed, resumes and completes), SIGTERM exits 0 leaving the job resumable, and a live-stream
 // job mapping what an ffmpeg sender pushes until it is finished over REST.
-#include <arpa/inet.h>
-#include <netinet/in.h>
 #include <signal.h>
-#include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -22,6 +19,7 @@
 // Eigen (via the evaluator) before httplib.h, whose <resolv.h> macros break Eigen.
 #include "tools/eval/evaluation.h"
 #include "tests/server/server_process.h"
+#include "tests/support/free_port.h"
 #include "tests/server/server_test_util.h"
 #include "engine/core/logging.h"
 #include "engine/export/tum_trajectory.h"
@@ -90,19 +88,6 @@ std::int64_t WaitForProgress(httplib::Client& client, const std::string& id, std
   return last_id;
 }
 
-// A TCP port nothing listens on right now.
-int FreePort() {
-  const int s = socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in addr{};
-  addr.sin_family = AF_INET;
-  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  bind(s, reinterpret_cast<sockaddr*>(&addr), sizeof(addr));
-  socklen_t length = sizeof(addr);
-  getsockname(s, reinterpret_cast<sockaddr*>(&addr), &length);
-  close(s);
-  return ntohs(addr.sin_port);
-}
-
 TEST(ServerE2E, LiveStreamJobMapsWhatArrivesUntilFinished) {
   // The server listens for the stream (tcp://...?listen=1); an ffmpeg sender pushes the clip in
   // real time over and over, like a drone's feed that never ends, until the client finishes
@@ -116,7 +101,7 @@ TEST(ServerE2E, LiveStreamJobMapsWhatArrivesUntilFinished) {
   ServerProcess server;
   ASSERT_TRUE(server.Start(GLAM_BIN, dir / "data", {"--allow-streams"})) << server.error();
   auto client = ClientFor(server);
-  const int port = FreePort();
+  const int port = glam::testing::FreePort();
   const json request = {{"stream_url", fmt::format("tcp://127.0.0.1:{}?listen=1", port)},
                         {"options", {{"name", "live"}, {"keyframes_per_submap", 6}}}};
   auto res = client.Post("/api/v1/jobs", request.dump(), "application/json");

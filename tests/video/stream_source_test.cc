@@ -4,12 +4,9 @@
 // connects and the user's end request each end the input within their time; and nothing but
 // the program's own choice (allow_streams) makes FFmpeg open a URL. The frames carry their
 // index as grey levels (test_media.h), so the test knows which frame it was handed.
-#include <arpa/inet.h>
 #include <fcntl.h>
-#include <netinet/in.h>
 #include <poll.h>
 #include <signal.h>
-#include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -27,6 +24,7 @@
 #include "engine/core/error.h"
 #include "engine/video/frame_source.h"
 #include "engine/video/stream_source.h"
+#include "tests/support/free_port.h"
 #include "tests/support/pipe_feeder.h"
 #include "tests/video/test_media.h"
 
@@ -36,6 +34,7 @@ namespace {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 using testing::DecodeIndex;
+using testing::FreePort;
 using testing::PipeFeeder;
 
 constexpr int kFrames = 120;
@@ -43,19 +42,6 @@ constexpr double kFps = 25.0;
 
 double SecondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
-}
-
-// A TCP port nothing listens on right now.
-int FreePort() {
-  const int s = socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in addr{};
-  addr.sin_family = AF_INET;
-  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  bind(s, reinterpret_cast<sockaddr*>(&addr), sizeof(addr));
-  socklen_t length = sizeof(addr);
-  getsockname(s, reinterpret_cast<sockaddr*>(&addr), &length);
-  close(s);
-  return ntohs(addr.sin_port);
 }
 
 class StreamSourceTest : public testing::TempDirTest {
