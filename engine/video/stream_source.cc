@@ -136,13 +136,9 @@ StreamSource::StreamSource(const std::string& input, const FrameSourceOptions& o
   capacity_ = static_cast<std::size_t>(
       std::max(2.0, std::min(std::round(options_.stream_buffer_s * info_.fps), by_memory)));
 
-  Frame first;
-  first.index = NumberFrame();
-  next_wanted_ = first.index + options_.stride;
-  first.timestamp_s = static_cast<double>(first.index) / info_.fps;
-  first.original_size = info_.original_size;
-  decoder_->Retrieve(info_.processing_size, &first.bgr);  // a format we cannot convert fails here
-  buffer_.push_back(std::move(first));
+  const int64_t first = NumberFrame();
+  next_wanted_ = first + options_.stride;
+  Push(GrabbedFrame(first));  // a format we cannot convert fails here, before the reader starts
   GLAM_LOG_INFO("stream '{}': {}x{} @ {:.3f} fps, processing {}x{}; buffer {} frames, {} when mapping "
                 "falls behind",
                 input_, info_.original_size.width, info_.original_size.height, info_.fps,
@@ -184,6 +180,14 @@ bool StreamSource::ShouldInterrupt() const {
   timed_out_.store(true);
   interrupted_.store(true);
   return true;
+}
+
+Frame StreamSource::GrabbedFrame(int64_t number) {
+  Frame frame;
+  frame.index = number;  // in the stream; Push() numbers it as SeekTo() asked
+  frame.original_size = decoder_->display_size();
+  decoder_->Retrieve(info_.processing_size, &frame.bgr);
+  return frame;
 }
 
 bool StreamSource::Push(Frame frame) {
@@ -233,11 +237,7 @@ void StreamSource::ReadLoop() {
       const int64_t index = NumberFrame();
       if (index < next_wanted_) continue;  // --stride
       next_wanted_ = index + options_.stride;
-      Frame frame;
-      frame.index = index;  // in the stream; Push() numbers it as SeekTo() asked
-      frame.original_size = decoder_->display_size();
-      decoder_->Retrieve(info_.processing_size, &frame.bgr);
-      if (!Push(std::move(frame))) break;
+      if (!Push(GrabbedFrame(index))) break;
     }
   } catch (...) {
     std::lock_guard<std::mutex> lock(mutex_);

@@ -94,8 +94,10 @@ class StreamSource : public FrameSource {
   int64_t NumberFrame();
   // FFmpeg's interrupt callback: closing, ended by the user, or waiting too long.
   bool ShouldInterrupt() const;
-  // Appends a decoded frame, dropping the oldest or waiting when the buffer is full; false when
-  // the source is closing.
+  // The frame the decoder just grabbed, with stream number `number`, at processing size.
+  Frame GrabbedFrame(int64_t number);
+  // Appends a decoded frame (its index and time as SeekTo() asked), dropping the oldest or
+  // waiting when the buffer is full; false when the source is closing.
   bool Push(Frame frame);
 
   // A pipe input's descriptor ("-", pipe:N) made non-blocking; its flags are restored when the

@@ -33,6 +33,7 @@
 #include "engine/pipeline/mapping_options.h"
 #include "tests/support/pipe_feeder.h"
 #include "tests/support/temp_dir.h"
+#include "tests/video/test_media.h"
 #include "tools/eval/evaluation.h"
 
 namespace glam {
@@ -49,9 +50,7 @@ class StreamMapping : public ::testing::Test {
     signal(SIGPIPE, SIG_IGN);
     dir_ = testing::FreshTempDir("stream_mapping");
     stream_ = dir_ / "feed.ts";
-    const std::string remux = "ffmpeg -nostdin -v error -y -i '" + (kClip / "video.mp4").string() +
-                              "' -c copy -f mpegts '" + stream_.string() + "'";
-    ASSERT_EQ(std::system(remux.c_str()), 0) << remux;
+    ASSERT_TRUE(testing::TranscodeWithFfmpeg(kClip / "video.mp4", stream_, "-c copy -f mpegts"));
     UseCalibration(&options_, ReadIntrinsicsJson(kClip / "intrinsics.json"));
     options_.source.allow_streams = true;
   }

@@ -26,6 +26,7 @@
 #include "engine/pipeline/mapping_options.h"
 #include "tests/support/exif_photo.h"
 #include "tests/support/unaligned_error.h"
+#include "tests/video/test_media.h"
 
 namespace glam::server {
 namespace {
@@ -95,9 +96,7 @@ TEST(ServerE2E, LiveStreamJobMapsWhatArrivesUntilFinished) {
   const fs::path dir = glam::testing::FreshTempDir("e2e_stream");
   const fs::path feed = dir / "feed.ts";
   fs::create_directories(dir);
-  const std::string remux = "ffmpeg -nostdin -v error -y -i '" + (kClip / "video.mp4").string() +
-                            "' -c copy -f mpegts '" + feed.string() + "'";
-  ASSERT_EQ(std::system(remux.c_str()), 0);
+  ASSERT_TRUE(glam::testing::TranscodeWithFfmpeg(kClip / "video.mp4", feed, "-c copy -f mpegts"));
   ServerProcess server;
   ASSERT_TRUE(server.Start(GLAM_BIN, dir / "data", {"--allow-streams"})) << server.error();
   auto client = ClientFor(server);
