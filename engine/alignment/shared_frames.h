@@ -13,6 +13,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "engine/alignment/landmark_match.h"
@@ -39,5 +40,23 @@ struct SharedFrameOptions {
 std::vector<LandmarkMatch> SharedFrameMatches(const Submap& reference, const Submap& query,
                                               const Sim3& reference_from_query,
                                               const SharedFrameOptions& options = {});
+
+// reference_from_query from the shared frames alone, without landmark matching: where the
+// hand-off puts a submap before alignment has verified it (the live preview of the open submap,
+// engine/pipeline/open_submap_preview.h).
+//  * Scale: in the shared frames, landmarks of the two submaps that project to the same pixel
+//    (within 2 px) lie on the same ray, and the median ratio of their depths is the scale (the
+//    camera centres of the few shared frames span too short a path to give it to better than
+//    1-2 %). Without 20 such pairs it is fitted with the rest.
+//  * Rotation and translation: each shared frame's centre, the point one viewing depth ahead
+//    and one beside that along the image x axis (the camera's orientation fixes the rotation
+//    about the flight path and the yaw, which centres along a short path leave loose).
+//  * Frames that disagree (a point missing the fit by more than max_disagreement_fraction of
+//    the reference depth) are found by fitting every pair of frames and keeping the largest
+//    agreeing set, which is fitted again.
+// Unset with fewer than 2 agreeing frames, or when their rms residual stays above that
+// fraction: one of the two posed the shared frames differently.
+std::optional<Sim3> EstimateFromSharedFrames(const Submap& reference, const Submap& query,
+                                             const SharedFrameOptions& options = {});
 
 }  // namespace glam

@@ -30,6 +30,11 @@ std::string TileFileName(std::uint32_t submap_id, TileVariant variant) {
                                         : fmt::format("tiles/{}.quantized.glb", submap_id);
 }
 
+std::string OpenTileFileName(std::uint32_t submap_id, TileVariant variant) {
+  return variant == TileVariant::kDraco ? fmt::format("tiles/{}.open.glb", submap_id)
+                                        : fmt::format("tiles/{}.open.quantized.glb", submap_id);
+}
+
 std::string TilesetFileName(TileVariant variant) {
   return variant == TileVariant::kDraco ? "tileset.json" : "tileset.quantized.json";
 }
@@ -47,30 +52,49 @@ json ColumnMajor(const Eigen::Matrix4d& m) {
   return out;
 }
 
+// One child tile (file-local): `box` in the submap frame, placed by world_from_submap; grows `world`.
+static json Child(const Eigen::AlignedBox3d& box, const Sim3& world_from_submap, std::string uri, json extras,
+           Eigen::AlignedBox3d* world) {
+  const double floor_half = MinHalfSize(box);
+  const Eigen::AlignedBox3d padded(box.min().array() - floor_half, box.max().array() + floor_half);
+  for (int k = 0; k < 8; ++k) {
+    world->extend(world_from_submap * padded.corner(static_cast<Eigen::AlignedBox3d::CornerType>(k)));
+  }
+  json child;
+  child["boundingVolume"] = {{"box", Box(box)}};
+  child["geometricError"] = 0.0;
+  child["refine"] = "ADD";
+  child["transform"] = ColumnMajor(world_from_submap.matrix());
+  child["content"] = {{"uri", std::move(uri)}};
+  child["extras"] = std::move(extras);
+  return child;
+}
+
 json BuildTileset(const MapSnapshot& snapshot, const std::map<std::uint32_t, Eigen::AlignedBox3d>& bounds,
-                  TileVariant variant, const std::string& run_id) {
+                  TileVariant variant, const std::string& run_id, const OpenTile* open) {
   json children = json::array();
   Eigen::AlignedBox3d world;  // root box: the children's boxes after their transforms
   for (const SubmapPlacement& placement : snapshot.submaps) {
     const auto found = bounds.find(placement.id);
     if (found == bounds.end() || found->second.isEmpty()) continue;
-    const Eigen::AlignedBox3d& box = found->second;
-    const double floor_half = MinHalfSize(box);
-    const Eigen::AlignedBox3d padded(box.min().array() - floor_half, box.max().array() + floor_half);
-    for (int k = 0; k < 8; ++k) {
-      world.extend(placement.world_from_submap * padded.corner(static_cast<Eigen::AlignedBox3d::CornerType>(k)));
-    }
-    json child;
-    child["boundingVolume"] = {{"box", Box(box)}};
-    child["geometricError"] = 0.0;
-    child["refine"] = "ADD";
-    child["transform"] = ColumnMajor(placement.world_from_submap.matrix());
-    child["content"] = {{"uri", TileUri(placement.id, variant, run_id)}};
-    child["extras"] = {{"submap", placement.id},
-                       {"disconnected", placement.disconnected},
-                       {"first_frame", placement.first_frame},
-                       {"last_frame", placement.last_frame}};
-    children.push_back(std::move(child));
+    children.push_back(Child(found->second, placement.world_from_submap, TileUri(placement.id, variant, run_id),
+                             {{"submap", placement.id},
+                              {"disconnected", placement.disconnected},
+                              {"first_frame", placement.first_frame},
+                              {"last_frame", placement.last_frame}},
+                             &world));
+  }
+  if (open != nullptr && !open->bounds.isEmpty()) {
+    const std::string version = fmt::format("{}{}open{}", run_id, run_id.empty() ? "" : "-", open->version);
+    children.push_back(Child(open->bounds, open->world_from_submap,
+                             OpenTileFileName(open->submap, variant) + "?v=" + version,
+                             {{"submap", open->submap},
+                              {"open", true},
+                              {"disconnected", false},
+                              {"keyframes", open->keyframes},
+                              {"first_frame", open->first_frame},
+                              {"last_frame", open->last_frame}},
+                             &world));
   }
   if (world.isEmpty()) world = Eigen::AlignedBox3d(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
 

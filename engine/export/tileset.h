@@ -18,6 +18,11 @@
 // content URIs carry the run's id as a query (`tiles/3.glb?v=<run_id>`): a client that cached
 // an earlier run's tile asks for a new URL instead of reusing stale bytes.
 //
+// `open`, when given, adds the open submap's provisional tile after the snapshot's children:
+// content.uri = tiles/<id>.open.glb?v=<run_id>-open<version>, extras {submap, open: true,
+// disconnected: false, keyframes, first_frame, last_frame}. Clients replace it by the
+// submap's own tile when a later tileset lists that instead.
+//
 // Submaps without a tile box (empty submaps) are left out of the children; the root then
 // still exists (3D Tiles needs one) with a tiny box at the origin when there is no child.
 #pragma once
@@ -41,6 +46,8 @@ enum class TileVariant {
 
 // Relative to the job / output directory, and the URI used in tileset.json.
 std::string TileFileName(std::uint32_t submap_id, TileVariant variant);
+// The open submap's provisional tile: tiles/<id>.open.glb / tiles/<id>.open.quantized.glb.
+std::string OpenTileFileName(std::uint32_t submap_id, TileVariant variant);
 // tileset.json or tileset.quantized.json.
 std::string TilesetFileName(TileVariant variant);
 
@@ -51,10 +58,24 @@ nlohmann::json ColumnMajor(const Eigen::Matrix4d& m);
 // not empty.
 std::string TileUri(std::uint32_t submap_id, TileVariant variant, const std::string& run_id);
 
+// The submap being built, shown before it completes (the live preview, Contracts "Tiles";
+// engine/pipeline/tile_writer.h): its provisional tile, rewritten as the submap grows, and a
+// placement derived from the submap before it (or its own levelling for the first submap).
+struct OpenTile {
+  std::uint32_t submap = 0;
+  Sim3 world_from_submap;
+  Eigen::AlignedBox3d bounds;  // of the tile, submap frame
+  std::int64_t keyframes = 0;
+  std::int64_t first_frame = 0;
+  std::int64_t last_frame = 0;
+  std::int64_t version = 0;  // counts the tile's rewrites: its content URI changes with each
+};
+
 // `bounds`: submap id -> axis-aligned box of its tile in the submap frame (TileBounds).
 // `run_id`: identifies the run that wrote the tiles (see above); may be empty.
 nlohmann::json BuildTileset(const MapSnapshot& snapshot,
                             const std::map<std::uint32_t, Eigen::AlignedBox3d>& bounds,
-                            TileVariant variant, const std::string& run_id = "");
+                            TileVariant variant, const std::string& run_id = "",
+                            const OpenTile* open = nullptr);
 
 }  // namespace glam

@@ -31,6 +31,7 @@
 #include "engine/pipeline/live_georeference.h"
 #include "engine/pipeline/map_refinement.h"
 #include "engine/pipeline/map_export.h"
+#include "engine/pipeline/open_submap_preview.h"
 #include "engine/pipeline/resume_checkpoint.h"
 #include "engine/pipeline/tile_writer.h"
 #include "engine/submap/submap_builder.h"
@@ -247,6 +248,7 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   // Map tiles for the viewer (written once per submap) and tileset.json (per revision).
   const std::string run_id = resume && !resume->run_id.empty() ? resume->run_id : NewRunId();
   TileWriter tiles(out_dir, run_id);
+  OpenSubmapPreviewer previewer(options.preview, options.alignment.leveling, tiles);
   GLAM_LOG_INFO("mapping {}: {}x{} -> {}x{}, {:.3g} fps, ~{} frames, initial focal {:.1f} px",
                 report.input, info.original_size.width, info.original_size.height,
                 info.processing_size.width, info.processing_size.height, report.fps,
@@ -265,7 +267,9 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   if (resume) {
     // Thread 2 rebuilds its database and graph from the persisted submaps.
     for (std::uint32_t id = 0; id < resume->next_submap_id; ++id) {
-      alignment.Push(std::make_shared<const Submap>(ReadSubmap(submaps_root, id)));
+      auto submap = std::make_shared<const Submap>(ReadSubmap(submaps_root, id));
+      if (id + 1 == resume->next_submap_id) previewer.OnSubmapCompleted(submap);
+      alignment.Push(std::move(submap));
     }
   }
   // Revisions go out in metres, east-north-up as soon as the GPS fit succeeds (live_georeference.h).
@@ -319,6 +323,9 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
     state.revision = published_revision();
     state.keyframes = builder.stats().keyframes;
     state.points = alignment.points();
+    state.previews = previewer.previews();
+    state.preview_submap = previewer.last_submap();
+    state.preview_keyframes = previewer.last_keyframes();
     progress(state);
   };
   double writing = 0;
@@ -338,7 +345,9 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
                     submap.first_frame, submap.last_frame, submap.keyframes.size(),
                     submap.landmarks.size());
       ++submaps_completed;
-      alignment.Push(std::make_shared<const Submap>(std::move(submap)));
+      auto shared = std::make_shared<const Submap>(std::move(submap));
+      previewer.OnSubmapCompleted(shared);
+      alignment.Push(std::move(shared));
       emit(true);  // every completed submap is reported (the server turns it into an event)
     }
   };
@@ -363,7 +372,8 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
       builder_seconds += Seconds(t0);
       ++state.frames_done;
       consume(std::move(completed));
-      emit(false);
+      const bool previewed = previewer.Update(builder);
+      emit(previewed);  // a preview is reported at once (the server turns it into an event)
     }
   } catch (...) {
     error = std::current_exception();
@@ -425,6 +435,7 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   const MapExportCounts exported = ExportWorldMap(*snapshot, submaps_root, out_dir, report.fps);
   WriteGeoJsonTrack(*snapshot, submaps_root, out_dir, report);
   tiles.OnRevision(*snapshot);
+  tiles.ClearOpenPreview();  // normally gone with the revision that placed its submap
   tiles.WriteMapGlb(*snapshot, submaps_root);
   WriteJson(out_dir / "graph.json", aligner.GraphJson());
   writing += Seconds(write_start);

@@ -16,6 +16,7 @@ void MappingOptions::Check() const {
   submap.Check();
   alignment.Check();
   global_refinement.Check();
+  preview.Check();
   if (intrinsics) intrinsics->Check();
   if (focal_px) CheckGreater("MappingOptions.focal_px", *focal_px, 0.0);
   CheckInRange("MappingOptions.default_focal_factor", default_focal_factor, 0.05, 20.0);

@@ -11,6 +11,7 @@
 #include "engine/features/klt_propagator.h"
 #include "engine/geo/georeference.h"
 #include "engine/features/sift_extractor.h"
+#include "engine/pipeline/open_submap_preview.h"
 #include "engine/pipeline/rolling_shutter.h"
 #include <filesystem>
 
@@ -37,6 +38,8 @@ struct MappingOptions {
   // After the last submap: one bundle adjustment of the whole map (engine/alignment/
   // global_refinement.h), for maps of up to global_refinement.max_keyframes keyframes.
   GlobalRefinementOptions global_refinement;
+  // The open submap shown as a provisional tile while it is built (open_submap_preview.h).
+  OpenSubmapPreviewOptions preview;
   // Vocabulary tree for finding overlapping submaps; empty = the one built into glam
   // (data/vocabulary/README.md says how it was trained).
   std::filesystem::path vocabulary;

@@ -23,6 +23,12 @@ struct MappingProgress {
   // Grows with every published map revision (docs/architecture.md, "Map revision"); 0 before
   // the first submap is placed.
   std::int64_t revision = 0;
+  // Live previews of the open submap written to the tilesets (open_submap_preview.h): how
+  // many so far, and the submap and keyframe count of the last. Not part of the job JSON; the
+  // server turns a new one into a `preview` event.
+  std::int64_t previews = 0;
+  std::int64_t preview_submap = -1;
+  std::int64_t preview_keyframes = 0;
 };
 
 // Called on the thread that runs RunMapping, at most a few times per second plus once at the

@@ -90,10 +90,100 @@ void TileWriter::OnRevision(const MapSnapshot& snapshot) {
       bounds_[placement.id] = Eigen::AlignedBox3d();
     }
   }
-  for (const TileVariant variant : {TileVariant::kDraco, TileVariant::kQuantized}) {
-    WriteFileAtomically(out_dir_ / TilesetFileName(variant), BuildTileset(snapshot, bounds_, variant, run_id_).dump(1));
-  }
+  WriteTilesets(snapshot);
   last_revision_ = snapshot.revision;
+  last_snapshot_ = snapshot;
+}
+
+void TileWriter::WriteTilesets(const MapSnapshot& snapshot) {
+  const std::optional<OpenTile> open = PlacedPreview(snapshot);
+  for (const TileVariant variant : {TileVariant::kDraco, TileVariant::kQuantized}) {
+    WriteFileAtomically(out_dir_ / TilesetFileName(variant),
+                        BuildTileset(snapshot, bounds_, variant, run_id_, open ? &*open : nullptr).dump(1));
+  }
+}
+
+std::optional<OpenTile> TileWriter::PlacedPreview(const MapSnapshot& snapshot) {
+  if (!preview_) return std::nullopt;
+  const auto placement_of = [&snapshot](std::uint32_t id) -> const SubmapPlacement* {
+    for (const SubmapPlacement& p : snapshot.submaps) {
+      if (p.id == id) return &p;
+    }
+    return nullptr;
+  };
+  if (placement_of(preview_->tile.submap) != nullptr) {  // its own tile is listed now
+    RemovePreviewFiles(preview_->tile.submap);
+    preview_.reset();
+    return std::nullopt;
+  }
+  OpenTile tile = preview_->tile;
+  if (!preview_->anchor) {
+    tile.world_from_submap = preview_->anchor_from_submap;
+    return tile;
+  }
+  const SubmapPlacement* anchor = placement_of(*preview_->anchor);
+  if (anchor == nullptr || anchor->disconnected) return std::nullopt;
+  tile.world_from_submap = anchor->world_from_submap * preview_->anchor_from_submap;
+  return tile;
+}
+
+bool TileWriter::OnOpenSubmapPreview(const Submap& preview, std::optional<std::uint32_t> anchor,
+                                     const Sim3& anchor_from_submap) {
+  std::lock_guard lock(mutex_);
+  if (anchor && !PlacedLocked(*anchor)) return false;
+  for (const SubmapPlacement& p : last_snapshot_.submaps) {
+    if (p.id == preview.id) return false;  // completed and placed already
+  }
+  const TileGeometry geometry = SubmapTileGeometry(preview);
+  if (geometry.points.empty()) return false;
+  if (preview_ && preview_->tile.submap != preview.id) RemovePreviewFiles(preview_->tile.submap);
+  WriteFileAtomically(out_dir_ / OpenTileFileName(preview.id, TileVariant::kDraco), EncodeDracoTileGlb(geometry, draco_));
+  WriteFileAtomically(out_dir_ / OpenTileFileName(preview.id, TileVariant::kQuantized), EncodeQuantizedTileGlb(geometry));
+  Preview next;
+  next.tile.submap = preview.id;
+  next.tile.bounds = TileBounds(geometry);
+  next.tile.keyframes = static_cast<std::int64_t>(preview.keyframes.size());
+  next.tile.first_frame = preview.first_frame;
+  next.tile.last_frame = preview.last_frame;
+  next.tile.version = ++preview_version_;
+  next.anchor = anchor;
+  next.anchor_from_submap = anchor_from_submap;
+  preview_ = std::move(next);
+  WriteTilesets(last_snapshot_);
+  return true;
+}
+
+bool TileWriter::PlacedLocked(std::uint32_t id) const {
+  for (const SubmapPlacement& p : last_snapshot_.submaps) {
+    if (p.id == id) return !p.disconnected;
+  }
+  return false;
+}
+
+bool TileWriter::placed(std::uint32_t id) const {
+  std::lock_guard lock(mutex_);
+  return PlacedLocked(id);
+}
+
+void TileWriter::ClearOpenPreview() {
+  std::lock_guard lock(mutex_);
+  if (!preview_) return;
+  RemovePreviewFiles(preview_->tile.submap);
+  preview_.reset();
+  WriteTilesets(last_snapshot_);
+}
+
+std::optional<std::pair<std::uint32_t, std::int64_t>> TileWriter::open_preview() const {
+  std::lock_guard lock(mutex_);
+  if (!preview_) return std::nullopt;
+  return std::make_pair(preview_->tile.submap, preview_->tile.first_frame);
+}
+
+void TileWriter::RemovePreviewFiles(std::uint32_t submap_id) const {
+  for (const TileVariant variant : {TileVariant::kDraco, TileVariant::kQuantized}) {
+    std::error_code ignored;  // a file that is gone already is fine
+    std::filesystem::remove(out_dir_ / OpenTileFileName(submap_id, variant), ignored);
+  }
 }
 
 std::int64_t TileWriter::WriteMapGlb(const MapSnapshot& snapshot, const std::filesystem::path& submaps_root) {

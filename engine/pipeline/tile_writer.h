@@ -7,6 +7,9 @@
 //   tiles/<id>.quantized.glb   KHR_mesh_quantization variant of the same tile (written with it)
 //   tileset.json               3D Tiles 1.1 over the Draco tiles, rewritten per revision
 //   tileset.quantized.json     the same over the quantized tiles
+//   tiles/<id>.open.glb        the open submap's provisional tile (both variants), rewritten as
+//                              the submap grows and listed in the tilesets until the submap's
+//                              own tile is (OnOpenSubmapPreview)
 //   map.glb                    whole map in world frame (Draco), written by WriteMapGlb
 // Every file is written atomically (WriteFileAtomically: temporary file + rename).
 //
@@ -22,10 +25,13 @@
 #include <filesystem>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "engine/export/glb_tile.h"
+#include "engine/export/tileset.h"
 #include "engine/map/map_snapshot.h"
 #include "engine/map/submap.h"
 
@@ -62,9 +68,40 @@ class TileWriter {
 
   std::int64_t last_revision_written() const;
 
+  // The live preview of the submap being built (SubmapBuilder::OpenSubmapPreview): writes
+  // tiles/<id>.open.glb (both variants) and rewrites the tilesets of the last written revision
+  // with it (the revision number stays: previews are not map revisions). Placement:
+  // world_from_anchor (the anchor submap's placement in each revision written from now on) *
+  // anchor_from_submap; without an anchor, anchor_from_submap is world_from_submap itself (the
+  // first submap, levelled on its own). A revision that places the submap itself, or that
+  // does not place the anchor (or marks it disconnected), lists no preview. Returns false, and
+  // writes nothing, when the last written revision does not place the anchor.
+  bool OnOpenSubmapPreview(const Submap& preview, std::optional<std::uint32_t> anchor,
+                           const Sim3& anchor_from_submap);
+  // Forgets the preview (its submap was discarded, or the run ends) and deletes its tiles;
+  // rewrites the tilesets if they listed it.
+  void ClearOpenPreview();
+  // Whether the last written revision places submap `id` in the map (connected).
+  bool placed(std::uint32_t id) const;
+  // The submap id and first frame of the preview the tilesets may list, if any.
+  std::optional<std::pair<std::uint32_t, std::int64_t>> open_preview() const;
+
  private:
   // Records the submap's bounds; only_missing: keep tile files that exist (resume).
   void WriteTiles(const Submap& submap, bool only_missing);
+  // Both tilesets of `snapshot`, with the preview where it is placed (PlacedPreview).
+  void WriteTilesets(const MapSnapshot& snapshot);
+  // The preview as placed in `snapshot`; unset when the snapshot lists no preview (see
+  // OnOpenSubmapPreview). Drops the preview once the snapshot places its submap.
+  std::optional<OpenTile> PlacedPreview(const MapSnapshot& snapshot);
+  void RemovePreviewFiles(std::uint32_t submap_id) const;
+  bool PlacedLocked(std::uint32_t id) const;
+
+  struct Preview {
+    OpenTile tile;  // world_from_submap filled in per revision
+    std::optional<std::uint32_t> anchor;
+    Sim3 anchor_from_submap;
+  };
 
   std::filesystem::path out_dir_;
   std::string run_id_;
@@ -72,6 +109,9 @@ class TileWriter {
   mutable std::mutex mutex_;
   std::map<std::uint32_t, Eigen::AlignedBox3d> bounds_;  // submap id -> tile bounds
   std::int64_t last_revision_ = -1;
+  MapSnapshot last_snapshot_;  // of last_revision_ (empty, revision 0, before the first)
+  std::optional<Preview> preview_;
+  std::int64_t preview_version_ = 0;
 };
 
 }  // namespace glam

@@ -107,6 +107,14 @@ class SubmapBuilder {
   // Frame index of the first frame of the open submap (resume point), if any.
   std::optional<std::int64_t> open_submap_first_frame() const;
 
+  // A provisional copy of the open submap, for showing the map grow between completions (a
+  // submap of keyframes_per_submap keyframes spans tens of seconds of flight): id =
+  // next_submap_id(), its keyframes, landmarks (positions and colours only: no descriptors or
+  // observations) and the poses of its posed frames so far, as tracking left them (no completion
+  // adjustment, relocalisation or filter pass yet). Unset until the open submap has at least
+  // `min_keyframes` keyframes (>= 2: bootstrapped). Costs a copy of the landmarks' positions.
+  std::optional<Submap> OpenSubmapPreview(std::size_t min_keyframes = 2) const;
+
  private:
   // Per-landmark data needed only while the submap is open.
   struct LandmarkExtra {

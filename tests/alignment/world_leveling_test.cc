@@ -41,6 +41,35 @@ TEST(WorldLeveling, TiltedPlaneBecomesHorizontalWithCamerasAbove) {
   }
 }
 
+// Under a nadir first camera the ground's normal (towards the cameras) is nearly opposite to the
+// submap's z axis, where the shortest rotation to +z has no stable yaw. The yaw must follow the
+// first camera's x axis instead: planes a degree apart give worlds a degree apart, not tens.
+TEST(WorldLeveling, YawFollowsTheFirstCameraUnderANadirView) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-40, 40);
+  const Eigen::Vector3d camera(0, 0, 0);  // the submap frame is the first camera's (z down to the ground)
+  for (const Eigen::Vector3d& tilt_axis : {Eigen::Vector3d(1, 0, 0), Eigen::Vector3d(0, 1, 0), Eigen::Vector3d(1, 1, 0)}) {
+    std::vector<Sim3> levelled;
+    for (const double tilt_deg : {0.0, 0.5, 1.0}) {
+      const SO3 tilt(Eigen::Matrix3d(Eigen::AngleAxisd(tilt_deg * M_PI / 180, tilt_axis.normalized())));
+      std::vector<Eigen::Vector3d> points;
+      for (int i = 0; i < 300; ++i) points.push_back(tilt * Eigen::Vector3d(u(rng), u(rng), 50));
+      const LevelingResult r = LevelGround(points, {camera, Eigen::Vector3d(3, 0, 0)});
+      ASSERT_TRUE(r.levelled);
+      levelled.push_back(r.world_from_submap);
+      // The camera's x axis (image right) points along world +x, level.
+      const Eigen::Vector3d x_in_world = r.world_from_submap.rotation() * Eigen::Vector3d::UnitX();
+      EXPECT_GT(x_in_world.x(), 0.999) << tilt_deg;
+      // Cameras above the ground, looking down.
+      EXPECT_LT((r.world_from_submap.rotation() * Eigen::Vector3d::UnitZ()).z(), -0.99);
+    }
+    for (std::size_t i = 1; i < levelled.size(); ++i) {
+      const double angle_deg = (levelled[i].rotation() * levelled[0].rotation().Inverse()).Log().norm() * 180 / M_PI;
+      EXPECT_LT(angle_deg, 1.1) << "planes " << i * 0.5 << " degrees apart";
+    }
+  }
+}
+
 TEST(WorldLeveling, TooFewPointsGivesIdentity) {
   const LevelingResult r = LevelGround({Eigen::Vector3d(0, 0, 0)}, {Eigen::Vector3d(0, 0, 1)});
   EXPECT_FALSE(r.levelled);

@@ -72,17 +72,20 @@ Eigen::Matrix4d FromColumnMajor(const json& a) {
 // Reads tile `id` from disk as a 3D Tiles client would (quantized variant: dequantize, y-up ->
 // z-up happens in DequantizePoints) and places its points with the tileset's transform; every
 // source landmark (matched by its colour) must land at world_from_submap * point_in_submap.
+// `open`: the open submap's preview child instead of the submap's own, with URI query `query`.
 void ExpectTilePlacedInWorld(const fs::path& dir, const json& tileset, const Submap& submap,
-                             const SubmapPlacement& placement) {
+                             const Sim3& world_from_submap, bool open = false,
+                             const std::string& query = "?v=run1") {
   const json* child = nullptr;
   for (const json& c : tileset["root"]["children"]) {
-    if (c["extras"]["submap"] == submap.id) child = &c;
+    if (c["extras"]["submap"] == submap.id && c["extras"].value("open", false) == open) child = &c;
   }
   ASSERT_NE(child, nullptr);
   const Eigen::Matrix4d transform = FromColumnMajor((*child)["transform"]);
   const std::string uri = (*child)["content"]["uri"];
-  ASSERT_EQ(uri.substr(uri.find('?')), "?v=run1");
+  ASSERT_EQ(uri.substr(uri.find('?')), query);
   const std::string file = uri.substr(0, uri.find('?'));
+  EXPECT_EQ(file.find(".open."), open ? file.find('.') : std::string::npos) << file;
   const tinygltf::Model model = glam::testing::ParseGlb(glam::testing::ReadBytes(dir / file));
   const bool quantized = uri.find(".quantized.") != std::string::npos;
   const std::vector<ColoredPoint> points =
@@ -91,11 +94,16 @@ void ExpectTilePlacedInWorld(const fs::path& dir, const json& tileset, const Sub
   for (const ColoredPoint& p : points) {
     const std::size_t index = p.color[0] | (static_cast<std::size_t>(p.color[1]) << 8);
     ASSERT_LT(index, submap.landmarks.size());
-    const Eigen::Vector3d want = placement.world_from_submap * submap.landmarks[index].point_in_submap;
+    const Eigen::Vector3d want = world_from_submap * submap.landmarks[index].point_in_submap;
     const Eigen::Vector3d got = (transform * p.position.cast<double>().homogeneous()).head<3>();
     // Quantisation (<= 60 / 2^15 per coordinate here) times the scale.
-    EXPECT_LE((got - want).norm(), 5e-3 * placement.world_from_submap.scale()) << uri;
+    EXPECT_LE((got - want).norm(), 5e-3 * world_from_submap.scale()) << uri;
   }
+}
+
+void ExpectTilePlacedInWorld(const fs::path& dir, const json& tileset, const Submap& submap,
+                             const SubmapPlacement& placement) {
+  ExpectTilePlacedInWorld(dir, tileset, submap, placement.world_from_submap);
 }
 
 TEST(TileWriter, TilesOnceTilesetPerRevisionPointsLandInTheWorld) {
@@ -288,6 +296,109 @@ TEST(TileWriter, ReadersNeverSeeAHalfWrittenTileset) {
   EXPECT_GT(reads, 0);
   EXPECT_EQ(bad, 0) << "of " << reads << " reads";
   EXPECT_EQ(ReadJson(dir / "tileset.json")["extras"]["revision"], 150);
+  fs::remove_all(dir);
+}
+
+// The open submap's live preview: listed in both tilesets beside the revision's submaps,
+// placed on its anchor's placement of each revision, under a new URI per rewrite; gone once a
+// revision places the submap itself (or when cleared), and never listed while its anchor is
+// not placed (or disconnected).
+TEST(TileWriter, OpenSubmapPreviewRidesOnItsAnchorUntilItsOwnTileIsPlaced) {
+  const fs::path dir = glam::testing::FreshTempDir("tile_writer_preview");
+  TileWriter writer(dir, "run1");
+  const Submap first = MakeSubmap(0, 500, 11);
+  Submap open = MakeSubmap(1, 300, 12);
+  const Sim3 anchor_from_open(0.8, SO3(Eigen::Matrix3d(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()))),
+                              Eigen::Vector3d(10, 0, 0));
+  writer.OnSubmapCompleted(first);
+
+  // Submap 0 is not placed yet: nothing to ride on.
+  EXPECT_FALSE(writer.OnOpenSubmapPreview(open, 0u, anchor_from_open));
+  EXPECT_FALSE(fs::exists(dir / "tiles/1.open.glb"));
+  EXPECT_FALSE(fs::exists(dir / "tileset.json"));
+  EXPECT_FALSE(writer.open_preview().has_value());
+
+  MapSnapshot rev1;
+  rev1.revision = 1;
+  rev1.submaps = {Place(0, 1.3, 0.2, Eigen::Vector3d(1, 2, 3))};
+  writer.OnRevision(rev1);
+  ASSERT_TRUE(writer.OnOpenSubmapPreview(open, 0u, anchor_from_open));
+  ASSERT_TRUE(writer.open_preview().has_value());
+  EXPECT_EQ(writer.open_preview()->first, 1u);
+  EXPECT_EQ(writer.open_preview()->second, open.first_frame);
+  json tileset = ReadJson(dir / "tileset.json");
+  EXPECT_EQ(tileset["extras"]["revision"], 1) << "a preview is not a map revision";
+  ASSERT_EQ(tileset["root"]["children"].size(), 2u);
+  const json& extras = tileset["root"]["children"][1]["extras"];
+  EXPECT_EQ(extras["open"], true);
+  EXPECT_EQ(extras["disconnected"], false);
+  EXPECT_EQ(extras["first_frame"], open.first_frame);
+  EXPECT_EQ(extras["last_frame"], open.last_frame);
+  ExpectTilePlacedInWorld(dir, tileset, first, rev1.submaps[0]);
+  ExpectTilePlacedInWorld(dir, tileset, open, rev1.submaps[0].world_from_submap * anchor_from_open, true,
+                          "?v=run1-open1");
+  ExpectTilePlacedInWorld(dir, ReadJson(dir / "tileset.quantized.json"), open,
+                          rev1.submaps[0].world_from_submap * anchor_from_open, true, "?v=run1-open1");
+
+  // The submap grows: the tile is rewritten under a new URI.
+  open.landmarks.resize(200);
+  ASSERT_TRUE(writer.OnOpenSubmapPreview(open, 0u, anchor_from_open));
+  tileset = ReadJson(dir / "tileset.json");
+  ExpectTilePlacedInWorld(dir, tileset, open, rev1.submaps[0].world_from_submap * anchor_from_open, true,
+                          "?v=run1-open2");
+
+  // Alignment moves submap 0: the preview moves with it.
+  MapSnapshot rev2 = rev1;
+  rev2.revision = 2;
+  rev2.submaps[0] = Place(0, 0.9, -0.5, Eigen::Vector3d(-4, 0, 1));
+  writer.OnRevision(rev2);
+  tileset = ReadJson(dir / "tileset.json");
+  ExpectTilePlacedInWorld(dir, tileset, open, rev2.submaps[0].world_from_submap * anchor_from_open, true,
+                          "?v=run1-open2");
+
+  // Its anchor disconnected: no preview in that revision.
+  MapSnapshot rev3 = rev2;
+  rev3.revision = 3;
+  rev3.submaps[0].disconnected = true;
+  writer.OnRevision(rev3);
+  EXPECT_EQ(ReadJson(dir / "tileset.json")["root"]["children"].size(), 1u);
+
+  // Submap 1 completes and is placed: its own tile replaces the preview, whose files go.
+  writer.OnSubmapCompleted(open);
+  MapSnapshot rev4 = rev2;
+  rev4.revision = 4;
+  rev4.submaps.push_back(Place(1, 1.1, 0.1, Eigen::Vector3d(8, 1, 0)));
+  writer.OnRevision(rev4);
+  tileset = ReadJson(dir / "tileset.json");
+  ASSERT_EQ(tileset["root"]["children"].size(), 2u);
+  for (const json& child : tileset["root"]["children"]) EXPECT_FALSE(child["extras"].value("open", false));
+  ExpectTilePlacedInWorld(dir, tileset, open, rev4.submaps[1]);
+  EXPECT_FALSE(fs::exists(dir / "tiles/1.open.glb"));
+  EXPECT_FALSE(fs::exists(dir / "tiles/1.open.quantized.glb"));
+  EXPECT_FALSE(writer.open_preview().has_value());
+  // A late preview of a placed submap is refused.
+  EXPECT_FALSE(writer.OnOpenSubmapPreview(open, 0u, anchor_from_open));
+  fs::remove_all(dir);
+}
+
+// The run's first submap is previewed before any revision, levelled on its own (no anchor);
+// ClearOpenPreview (a discarded submap, the end of the run) takes it out again.
+TEST(TileWriter, FirstSubmapPreviewWithoutAnchorAndClear) {
+  const fs::path dir = glam::testing::FreshTempDir("tile_writer_first_preview");
+  TileWriter writer(dir, "run1");
+  const Submap open = MakeSubmap(0, 400, 13);
+  const Sim3 world_from_open(1.0, SO3(Eigen::Matrix3d(Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()))),
+                             Eigen::Vector3d(0, 0, 10));
+  ASSERT_TRUE(writer.OnOpenSubmapPreview(open, std::nullopt, world_from_open));
+  json tileset = ReadJson(dir / "tileset.json");
+  EXPECT_EQ(tileset["extras"]["revision"], 0);
+  ASSERT_EQ(tileset["root"]["children"].size(), 1u);
+  ExpectTilePlacedInWorld(dir, tileset, open, world_from_open, true, "?v=run1-open1");
+  writer.ClearOpenPreview();
+  tileset = ReadJson(dir / "tileset.json");
+  EXPECT_FALSE(tileset["root"].contains("children"));
+  EXPECT_FALSE(fs::exists(dir / "tiles/0.open.glb"));
+  EXPECT_FALSE(writer.open_preview().has_value());
   fs::remove_all(dir);
 }
 

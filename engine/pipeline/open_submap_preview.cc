@@ -1,0 +1,72 @@
+#include "engine/pipeline/open_submap_preview.h"
+
+#include "engine/alignment/shared_frames.h"
+#include "engine/core/logging.h"
+#include "engine/core/options.h"
+
+namespace glam {
+
+void OpenSubmapPreviewOptions::Check() const {
+  CheckGreaterEqual("OpenSubmapPreviewOptions.interval_s", interval_s, 0.0);
+  CheckInRange("OpenSubmapPreviewOptions.min_keyframes", min_keyframes, 2, 1000);
+}
+
+OpenSubmapPreviewer::OpenSubmapPreviewer(const OpenSubmapPreviewOptions& options, const LevelingOptions& leveling,
+                                         TileWriter& tiles)
+    : options_(options), leveling_(leveling), tiles_(tiles) {
+  options_.Check();
+  leveling_.Check();
+}
+
+void OpenSubmapPreviewer::OnSubmapCompleted(std::shared_ptr<const Submap> submap) { previous_ = std::move(submap); }
+
+bool OpenSubmapPreviewer::Update(const SubmapBuilder& builder) {
+  if (options_.interval_s <= 0) return false;
+  // A preview whose submap was discarded (closed with too few keyframes: the next one, started
+  // elsewhere, got its id) must not stay on screen.
+  if (const auto shown = tiles_.open_preview();
+      shown && shown->first == builder.next_submap_id() && builder.open_submap_first_frame() != shown->second) {
+    tiles_.ClearOpenPreview();
+  }
+  const std::int64_t keyframes = builder.stats().keyframes;
+  const Clock::time_point now = Clock::now();
+  if (keyframes == keyframes_seen_ || now - last_time_ < std::chrono::duration<double>(options_.interval_s)) {
+    return false;
+  }
+  // Where the open submap will be placed from: the submap before it, once a revision placed
+  // that (a fraction of a second after it completed), or its own levelling for the run's first.
+  const std::uint32_t id = builder.next_submap_id();
+  std::optional<std::uint32_t> anchor;
+  if (previous_ && previous_->id + 1 == id) {
+    if (!tiles_.placed(previous_->id)) return false;  // tried again on the next frame
+    anchor = previous_->id;
+  } else if (id != 0) {
+    return false;  // after a tracking loss: no shared frames, placed by alignment once complete
+  }
+  const Clock::time_point start = now;
+  std::optional<Submap> preview = builder.OpenSubmapPreview(static_cast<std::size_t>(options_.min_keyframes));
+  if (!preview) return false;
+  keyframes_seen_ = keyframes;
+  last_time_ = now;
+  Sim3 anchor_from_open;
+  if (anchor) {
+    const std::optional<Sim3> previous_from_open = EstimateFromSharedFrames(*previous_, *preview);
+    if (!previous_from_open) {
+      GLAM_LOG_DEBUG("open submap {}: no placement from the frames it shares with submap {}", id, *anchor);
+      return false;
+    }
+    anchor_from_open = *previous_from_open;
+  } else {
+    anchor_from_open = LevelSubmap(*preview, leveling_).world_from_submap;
+  }
+  if (!tiles_.OnOpenSubmapPreview(*preview, anchor, anchor_from_open)) return false;
+  ++previews_;
+  last_submap_ = preview->id;
+  last_keyframes_ = static_cast<std::int64_t>(preview->keyframes.size());
+  GLAM_LOG_DEBUG("open submap {} previewed: {} keyframes, {} landmarks, {} frames posed, {:.1f} ms", preview->id,
+                 preview->keyframes.size(), preview->landmarks.size(), preview->frame_poses.size(),
+                 1e3 * std::chrono::duration<double>(Clock::now() - start).count());
+  return true;
+}
+
+}  // namespace glam
