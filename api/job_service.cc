@@ -291,9 +291,9 @@ JobPage JobService::List(int limit, int offset) const {
 JobEvent JobService::EmitLocked(Job& job, const std::string& type, json data) {
   JobEvent event{job.last_event_id + 1, type, std::move(data)};
   job.last_event_id = event.id;
-  if (type == "progress") {
-    store_->Update(job);
-    live_[job.id].latest_progress = event;
+  if (type == "progress" || type == "preview") {
+    store_->Update(job);  // keeps last_event_id, so ids stay unique across a restart
+    (type == "progress" ? live_[job.id].latest_progress : live_[job.id].latest_preview) = event;
   } else {
     store_->AppendEvent(job.id, event);
   }
@@ -411,17 +411,21 @@ fs::path JobService::ResultFile(const std::string& id, const std::string& name) 
     path = dir / name;
   } else if (name.rfind("tiles/", 0) == 0 && name.size() > 10 &&
              name.compare(name.size() - 4, 4, ".glb") == 0) {
-    // tiles/<n>.glb (Draco) or tiles/<n>.quantized.glb (KHR_mesh_quantization variant).
+    // tiles/<n>.glb (Draco) or tiles/<n>.quantized.glb (KHR_mesh_quantization variant), and
+    // the open submap's preview tiles/<n>.open.glb / tiles/<n>.open.quantized.glb.
     std::string_view stem = std::string_view(name).substr(6, name.size() - 10);
-    constexpr std::string_view kQuantized = ".quantized";
-    const bool quantized = stem.size() > kQuantized.size() &&
-                           stem.substr(stem.size() - kQuantized.size()) == kQuantized;
-    if (quantized) stem.remove_suffix(kQuantized.size());
+    const auto strip = [&stem](std::string_view suffix) {
+      const bool has = stem.size() > suffix.size() && stem.substr(stem.size() - suffix.size()) == suffix;
+      if (has) stem.remove_suffix(suffix.size());
+      return has;
+    };
+    const bool quantized = strip(".quantized");
+    const bool open = strip(".open");
     long long submap = 0;
     if (!ParseNonNegativeInt(stem, &submap)) {
-      throw ApiError(400, "bad_request", "tile names are tiles/<submap number>.glb");
+      throw ApiError(400, "bad_request", "tile names are tiles/<submap number>.glb (or .open.glb)");
     }
-    path = dir / "tiles" / fmt::format("{}{}.glb", submap, quantized ? ".quantized" : "");
+    path = dir / "tiles" / fmt::format("{}{}{}.glb", submap, open ? ".open" : "", quantized ? ".quantized" : "");
   } else {
     throw ApiError(404, "not_found", fmt::format("unknown result file {}", name));
   }
@@ -451,13 +455,13 @@ EventBatch JobService::WaitForEvents(const std::string& id, std::int64_t after_i
     }
     batch.events = store_->EventsAfter(id, after_id);
     const auto live = live_.find(id);
-    if (live != live_.end() && live->second.latest_progress &&
-        live->second.latest_progress->id > after_id) {
-      const JobEvent& progress = *live->second.latest_progress;
-      const auto pos = std::lower_bound(
-          batch.events.begin(), batch.events.end(), progress.id,
-          [](const JobEvent& e, std::int64_t v) { return e.id < v; });
-      batch.events.insert(pos, progress);
+    if (live != live_.end()) {
+      for (const std::optional<JobEvent>& latest : {live->second.latest_progress, live->second.latest_preview}) {
+        if (!latest || latest->id <= after_id) continue;
+        const auto pos = std::lower_bound(batch.events.begin(), batch.events.end(), latest->id,
+                                          [](const JobEvent& e, std::int64_t v) { return e.id < v; });
+        batch.events.insert(pos, *latest);
+      }
     }
     const std::int64_t last_seen = batch.events.empty() ? after_id : batch.events.back().id;
     batch.finished = IsTerminal(job->state) && last_seen >= store_->MaxEventId(id);
@@ -603,6 +607,11 @@ void JobService::OnProgress(const std::string& id, const MappingProgress& progre
     }
     if (progress.revision > live.last.revision) {
       EmitLocked(job, "revision", {{"revision", progress.revision}});
+    }
+    if (progress.previews > live.last.previews) {  // the open submap's tile in tileset.json changed
+      EmitLocked(job, "preview", {{"submap_id", progress.preview_submap},
+                                  {"keyframes", progress.preview_keyframes},
+                                  {"revision", progress.revision}});
     }
     const bool stage_changed = progress.stage != live.last.stage;
     live.last = progress;

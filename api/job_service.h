@@ -160,7 +160,10 @@ class JobService {
     CancellationToken end_stream;  // stream jobs: Finish() ends the input
     MappingProgress last;
     std::int64_t last_progress_ms = 0;
+    // Events that only matter while they are the latest (not stored, not replayed beyond the
+    // latest): `progress`, and `preview` (the open submap's tile changed, about once a second).
     std::optional<JobEvent> latest_progress;
+    std::optional<JobEvent> latest_preview;
   };
 
   void Recover();

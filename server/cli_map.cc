@@ -264,6 +264,11 @@ void RegisterMapCommand(CLI::App& app) {
                   "across submaps) when it has at most this many keyframes; 0 = never (the paper: "
                   "submaps stay rigid)")
       ->capture_default_str();
+  cmd->add_option("--preview-interval", args->options.preview.interval_s,
+                  "While a submap is built, write it as a provisional map tile (tiles/<id>.open.glb, "
+                  "listed in tileset.json) at most every this many seconds, so viewers see the map grow "
+                  "before the submap completes; 0 = off")
+      ->capture_default_str();
   cmd->add_option("--feature-workers", args->options.feature_workers,
                   "Frames whose SIFT features are extracted in parallel")
       ->capture_default_str();

@@ -55,8 +55,9 @@ void HandleDownload(Context& ctx, const httplib::Request& req, httplib::Response
                     const std::string& file_name) {
   const std::string id = JobIdParam(req);
   std::string name = file_name;
-  const bool tile = name == "tiles/{submap}.glb";
-  if (tile) name = "tiles/" + std::string(req.matches[2]) + ".glb";
+  const bool open_route = name == "tiles/{submap}.open.glb";
+  const bool tile = open_route || name == "tiles/{submap}.glb";
+  if (tile) name = "tiles/" + std::string(req.matches[2]) + (open_route ? ".open.glb" : ".glb");
   constexpr std::string_view kPart = "{part}";
   if (const std::size_t at = name.find(kPart); at != std::string::npos) {
     name.replace(at, kPart.size(), std::string(req.matches[2]));
@@ -73,6 +74,10 @@ void HandleDownload(Context& ctx, const httplib::Request& req, httplib::Response
     }
   }
   const std::filesystem::path path = ctx.service.ResultFile(id, name);
+  // The open submap's preview tile (tiles/<n>.open.glb, also reached as the quantized variant
+  // tiles/<n>.open.quantized.glb) is rewritten as the submap grows (its URIs in tileset.json
+  // are versioned), so unlike a submap's own tile it is not immutable.
+  const bool open_tile = tile && name.find(".open.") != std::string::npos;
 
   struct stat info {};
   std::FILE* raw = std::fopen(path.c_str(), "rb");
@@ -85,9 +90,9 @@ void HandleDownload(Context& ctx, const httplib::Request& req, httplib::Response
   const std::string etag = fmt::format("\"{:x}-{:x}{:09}\"", size, info.st_mtim.tv_sec, info.st_mtim.tv_nsec);
   res.set_header("ETag", etag);
   res.set_header("Accept-Ranges", "bytes");
-  // A tile is written once, when its submap completes, and never changes: cache it for good.
+  // A submap's tile is written once, when it completes, and never changes: cache it for good.
   // Everything else (tileset.json gets a new revision on every alignment) is revalidated.
-  res.set_header("Cache-Control", tile ? "public, max-age=31536000, immutable" : "no-cache");
+  res.set_header("Cache-Control", tile && !open_tile ? "public, max-age=31536000, immutable" : "no-cache");
   if (req.has_header("If-None-Match") && EtagMatches(req.get_header_value("If-None-Match"), etag)) {
     res.status = 304;
     return;

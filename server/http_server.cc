@@ -127,7 +127,7 @@ const std::vector<RouteDef>& RouteTable() {
       SendJson(res, 200, api::JobToJson(ctx.service.Finish(JobIdParam(req))));
     });
     for (const char* file : {"trajectory.tum", "trajectory.geojson", "points.ply", "report.json", "graph.json",
-                             "tileset.json", "map.glb", "tiles/{submap}.glb",
+                             "tileset.json", "map.glb", "tiles/{submap}.open.glb", "tiles/{submap}.glb",
                              "parts/{part}/trajectory.tum", "parts/{part}/points.ply"}) {
       const std::string name = file;
       plain("GET", ("/api/v1/jobs/{id}/" + name).c_str(), true,

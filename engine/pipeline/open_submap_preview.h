@@ -31,8 +31,9 @@ struct OpenSubmapPreviewOptions {
   // keyframe (landmarks are triangulated at keyframes); 0 turns previews off. Each costs a few
   // milliseconds (a copy of the landmarks, two tile encodings, two small tilesets).
   double interval_s = 1.0;
-  // The open submap needs this many keyframes before it is shown (>= 2: bootstrapped).
-  int min_keyframes = 3;
+  // The open submap needs this many keyframes before it is shown (>= 2: bootstrapped; keyframes
+  // often come in pairs, the middle one and the current frame, so 3 would skip 2 -> 4).
+  int min_keyframes = 2;
 
   void Check() const;  // throws InputError
 };

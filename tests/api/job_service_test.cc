@@ -136,6 +136,7 @@ TEST(JobService, RunsAJobToCompletionWithOrderedEvents) {
   std::vector<std::string> states;
   int submaps = 0;
   int revisions = 0;
+  int previews = 0;
   for (std::size_t i = 0; i < events.size(); ++i) {
     if (i > 0) {
       EXPECT_GT(events[i].id, events[i - 1].id);
@@ -146,7 +147,13 @@ TEST(JobService, RunsAJobToCompletionWithOrderedEvents) {
       ++submaps;
     }
     if (events[i].type == "revision") ++revisions;
+    if (events[i].type == "preview") {  // the open submap: the one after those completed
+      EXPECT_EQ(events[i].data["submap_id"], submaps);
+      EXPECT_TRUE(events[i].data.contains("keyframes"));
+      ++previews;
+    }
   }
+  EXPECT_GE(previews, 1);
   EXPECT_EQ(states, (std::vector<std::string>{"queued", "running", "completed"}));
   EXPECT_EQ(submaps, 3);  // submaps_completed went 0 -> 3
   EXPECT_EQ(revisions, 3);
@@ -159,15 +166,20 @@ TEST(JobService, RunsAJobToCompletionWithOrderedEvents) {
   EXPECT_EQ(StatusOf([&] { service.ResultFile(created.id, "points.ply"); }), 404);
   EXPECT_EQ(StatusOf([&] { service.ResultFile(created.id, "tileset.json"); }), 404);
   EXPECT_EQ(StatusOf([&] { service.ResultFile(created.id, "tiles/x.glb"); }), 400);
+  EXPECT_EQ(StatusOf([&] { service.ResultFile(created.id, "tiles/x.open.glb"); }), 400);
+  EXPECT_EQ(StatusOf([&] { service.ResultFile(created.id, "tiles/1.quantized.open.glb"); }), 400);
+  EXPECT_EQ(StatusOf([&] { service.ResultFile(created.id, "tiles/1.open.glb"); }), 404);  // none left
   EXPECT_EQ(StatusOf([&] { service.ResultFile(created.id, "../glam.db"); }), 404);
   EXPECT_EQ(service.Stats().frames_processed_total, 100);
   EXPECT_EQ(service.Stats().jobs_by_state[JobState::kCompleted], 1);
 
-  // Replay after an event id: exactly the persisted events after it, no progress.
+  // Replay after an event id: exactly the persisted events after it, no progress or preview
+  // (only ever the latest of those, while the job runs).
   const EventBatch replay = service.WaitForEvents(created.id, events[1].id, 0ms);
   for (const JobEvent& e : replay.events) {
     EXPECT_GT(e.id, events[1].id);
     EXPECT_NE(e.type, "progress");
+    EXPECT_NE(e.type, "preview");
   }
   EXPECT_TRUE(replay.finished);
 }

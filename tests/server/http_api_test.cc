@@ -355,6 +355,31 @@ TEST_F(HttpApiTest, MapTilesTilesetAndFormatsAreServed) {
   EXPECT_EQ(tileset["asset"]["tilesetVersion"], "2");
   EXPECT_EQ(tileset["root"]["children"][0]["transform"][0], 2.0);
 
+  // The open submap's preview: listed in both tilesets under a versioned URI that the server
+  // resolves (Draco and quantized), revalidated instead of cached for good.
+  Submap open = submap;
+  open.id = 1;
+  open.frame_poses.push_back(FramePose{});
+  ASSERT_TRUE(tiles.OnOpenSubmapPreview(open, 0u, Sim3()));
+  for (const std::string format : {"", "?format=quantized"}) {
+    res = client.Get(base + "tileset.json" + format);
+    ASSERT_TRUE(res);
+    const json with_open = json::parse(res->body);
+    ASSERT_EQ(with_open["root"]["children"].size(), 2u) << format;
+    const json& child = with_open["root"]["children"][1];
+    EXPECT_EQ(child["extras"]["open"], true);
+    const std::string open_uri = child["content"]["uri"];
+    EXPECT_NE(open_uri.find("open"), std::string::npos) << open_uri;
+    res = client.Get(base + open_uri);
+    ASSERT_TRUE(res);
+    EXPECT_EQ(res->status, 200) << open_uri;
+    EXPECT_EQ(res->body, glam::testing::ReadFile(job_dir / open_uri.substr(0, open_uri.find('?'))));
+    EXPECT_EQ(res->get_header_value("Cache-Control"), "no-cache") << open_uri;
+  }
+  ExpectError(client.Get(base + "tiles/x.open.glb"), 400, "bad_request", "bad open tile name");
+  tiles.ClearOpenPreview();
+  ExpectError(client.Get(base + "tiles/1.open.glb"), 404, "not_available", "preview gone");
+
   EXPECT_EQ(tiles.WriteMapGlb(snapshot, job_dir / "submaps"), 50);
   res = client.Get(base + "map.glb");
   ASSERT_TRUE(res);
@@ -656,7 +681,8 @@ TEST_F(HttpApiTest, LastEventIdReplaysExactlyTheMissedEvents) {
   const std::int64_t resume_after = all[1].id;
   std::vector<std::int64_t> expected;
   for (const SseEvent& e : all) {
-    if (e.id > resume_after && e.type != "progress") expected.push_back(e.id);
+    // progress and preview: only the latest of them, while the job runs
+    if (e.id > resume_after && e.type != "progress" && e.type != "preview") expected.push_back(e.id);
   }
   const auto replay = FollowToEnd(client, id, {{"Last-Event-ID", std::to_string(resume_after)}});
   std::vector<std::int64_t> got;

@@ -15,6 +15,10 @@ void FakeMapping::Run(const std::filesystem::path& dir, const ProgressCallback& 
     p.frames_total = steps * frames_per_step;
     p.submaps_completed = i / steps_per_submap;
     p.revision = i / steps_per_submap;
+    // A preview of the open submap (the one after the completed ones) on every step.
+    p.previews = i;
+    p.preview_submap = p.submaps_completed;
+    p.preview_keyframes = 2 + i % steps_per_submap;
     progress(p);
     while (hold && i == hold_step) {
       at_hold = true;

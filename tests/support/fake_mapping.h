@@ -1,5 +1,5 @@
 // A stand-in for RunMapping in the job-service and HTTP tests: it reports progress the way the
-// engine does (frames, submaps, revisions growing step by step), can be held at one step until
+// engine does (frames, submaps, revisions and previews of the open submap growing step by step), can be held at one step until
 // the test releases or cancels it, and writes a trajectory.tum, in milliseconds and without a
 // video. Holding is what lets tests cancel, restart and run jobs side by side deterministically.
 #pragma once

@@ -341,6 +341,14 @@ async function main() {
         `several revisions followed over SSE (${viewer.revisionEvents} events, ${viewer.revisionsApplied.length} applied)`);
     }
     if (moved > 0) check(viewer.transformUpdates >= moved, `${moved} tiles moved by revisions without reloading`);
+    // The submap being built was shown before it completed (a provisional tile per `preview`
+    // event; one that arrives while the submap completes may be skipped), and none is left.
+    console.log(`preview events ${viewer.previewEvents}, provisional tiles decoded ${viewer.previewsLoaded}: ` +
+      `${JSON.stringify(viewer.previewFetches)}`);
+    check(viewer.previewEvents > 0, `the server announced provisional tiles of the submaps being built (${viewer.previewEvents} preview events)`);
+    check(viewer.previewsLoaded > 0, `the viewer showed ${viewer.previewsLoaded} provisional tiles while submaps were built`);
+    check(viewer.openSubmap === null && children.every((c) => !c.extras.open),
+      'no provisional tile is left in the final tileset or the view');
 
 
     // 4. Screenshot: not blank; saved as the test's artifact.

@@ -1,4 +1,4 @@
-// The job's Server-Sent Events (docs/api.md "Events"): state, progress, submap, revision.
+// The job's Server-Sent Events (docs/api.md "Events"): state, progress, submap, revision, preview.
 // EventSource cannot send headers, so the token goes in the query string. The stream of a
 // finished job ends after its final state event: close it then, or EventSource reconnects.
 
@@ -6,7 +6,8 @@ import { apiUrl, withToken } from './api.js';
 
 const TERMINAL = new Set(['completed', 'failed', 'canceled']);
 
-// handlers: { state(data), progress(data), submap(data, receivedAt), revision(data, receivedAt), error() }
+// handlers: { state(data), progress(data), submap(data, receivedAt), revision(data, receivedAt),
+//            preview(data, receivedAt), error() }
 export function subscribeJobEvents(jobId, handlers) {
   const source = new EventSource(withToken(apiUrl(`jobs/${encodeURIComponent(jobId)}/events`)));
   const parse = (e) => {
@@ -22,7 +23,7 @@ export function subscribeJobEvents(jobId, handlers) {
     if (TERMINAL.has(data.state)) source.close();
     if (handlers.state) handlers.state(data);
   });
-  for (const name of ['progress', 'submap', 'revision']) {
+  for (const name of ['progress', 'submap', 'revision', 'preview']) {
     source.addEventListener(name, (e) => {
       const data = parse(e);
       if (data && handlers[name]) handlers[name](data, performance.now());

@@ -1,6 +1,8 @@
 // The tiles of one job in the scene. Each submap is a group whose matrix is world_from_submap
 // (from tileset.json) times the +90 deg X rotation of glTF content; a new map revision only
 // changes these matrices, the decoded points stay (tiles are immutable, docs/architecture.md).
+// The submap being built comes as a provisional tile (extras.open) under a new URL whenever it
+// grew; it is drawn slightly transparent and replaced like any tile whose URL changed.
 
 import * as THREE from 'three';
 import { Z_UP_FROM_Y_UP, fetchTileset } from './tileset.js';
@@ -20,6 +22,9 @@ export function createMapTiles(scene, jobId, onChange) {
   const style = { colorBy: 'rgb', pointSize: 2, showTrajectory: true };
   const counters = {
     revision: -1, tilesLoaded: 0, pointsLoaded: 0, pointsConnected: 0, disconnected: 0, expectedTiles: 0,
+    // The provisional tile of the submap being built, once loaded: {submap, keyframes, points};
+    // not counted in tilesLoaded / pointsLoaded. previewsLoaded: such tiles decoded so far.
+    openSubmap: null, previewsLoaded: 0, previewFetches: {},
     tileFetches: {}, transformUpdates: 0, staleTilesets: 0, revisionsApplied: [], bytesLoaded: 0, errors: [],
     // Where the map is on the earth ({latitude, longitude, altitude} of its ENU origin) once a
     // revision was georeferenced, and the first revision that was.
@@ -34,6 +39,8 @@ export function createMapTiles(scene, jobId, onChange) {
     const color = submapColor(entry.submap);
     for (const p of entry.points) {
       p.material.size = style.pointSize;
+      p.material.transparent = entry.open;
+      p.material.opacity = entry.open ? 0.6 : 1.0;
       p.material.vertexColors = style.colorBy === 'rgb' && p.geometry.hasAttribute('color');
       p.material.color.copy(style.colorBy === 'rgb' ? new THREE.Color(1, 1, 1) : color);
       p.material.needsUpdate = true;
@@ -52,7 +59,8 @@ export function createMapTiles(scene, jobId, onChange) {
   }
 
   async function load(entry) {
-    counters.tileFetches[entry.submap] = (counters.tileFetches[entry.submap] || 0) + 1;
+    const fetches = entry.open ? counters.previewFetches : counters.tileFetches;
+    fetches[entry.submap] = (fetches[entry.submap] || 0) + 1;
     const tile = await loadTile(entry.url);
     if (tiles.get(entry.submap) !== entry) return;  // replaced meanwhile
     entry.decodedAt = performance.now();
@@ -71,8 +79,7 @@ export function createMapTiles(scene, jobId, onChange) {
     entry.pointCount = tile.pointCount;
     applyStyle(entry);
     entry.group.add(tile.scene);
-    counters.tilesLoaded += 1;
-    counters.pointsLoaded += tile.pointCount;
+    if (entry.open) counters.previewsLoaded += 1;
     counters.bytesLoaded += tile.bytes;
     recount();
     scene.onNextFrame((t) => {
@@ -84,22 +91,32 @@ export function createMapTiles(scene, jobId, onChange) {
   function recount() {
     let connected = 0;
     let disconnected = 0;
+    let loaded = 0;
+    let points = 0;
+    counters.openSubmap = null;
     for (const e of tiles.values()) {
+      if (e.open) {
+        if (e.content) counters.openSubmap = { submap: e.submap, keyframes: e.keyframes, points: e.pointCount };
+        continue;
+      }
       if (e.disconnected) disconnected += 1;
       if (e.content && !e.disconnected) connected += e.pointCount;
+      if (e.content) {
+        loaded += 1;
+        points += e.pointCount;
+      }
     }
     counters.pointsConnected = connected;
     counters.disconnected = disconnected;
+    counters.tilesLoaded = loaded;
+    counters.pointsLoaded = points;
   }
 
   function remove(entry) {
     scene.mapRoot.remove(entry.group);
     tiles.delete(entry.submap);
-    if (entry.content) {
-      counters.tilesLoaded -= 1;
-      counters.pointsLoaded -= entry.pointCount;
-      entry.content.traverse((o) => { if (o.geometry) o.geometry.dispose(); });
-    }
+    if (entry.content) entry.content.traverse((o) => { if (o.geometry) o.geometry.dispose(); });
+    recount();
   }
 
   async function syncOnce() {
@@ -109,12 +126,17 @@ export function createMapTiles(scene, jobId, onChange) {
     for (const t of tileset.tiles) {
       seen.add(t.submap);
       let entry = tiles.get(t.submap);
-      if (entry && entry.url !== t.url) {  // the job was mapped again: a different tile
+      // A different tile: the job was mapped again, the submap being built grew, or its own
+      // tile replaces the provisional one.
+      if (entry && entry.url !== t.url) {
         remove(entry);
         entry = undefined;
       }
       if (!entry) {
-        entry = { submap: t.submap, url: t.url, group: new THREE.Group(), content: null, points: [], lines: [] };
+        entry = {
+          submap: t.submap, url: t.url, open: t.open, keyframes: t.keyframes, group: new THREE.Group(), content: null,
+          points: [], lines: [],
+        };
         entry.group.matrixAutoUpdate = false;
         entry.group.name = `submap ${t.submap}`;
         tiles.set(t.submap, entry);
@@ -193,7 +215,8 @@ export function createMapTiles(scene, jobId, onChange) {
     settle,
     setStyle,
     counters,
-    has: (submap) => tiles.has(submap) && tiles.get(submap).content !== null,
+    // The submap's own tile is loaded (not only its provisional one).
+    has: (submap) => tiles.has(submap) && tiles.get(submap).content !== null && !tiles.get(submap).open,
     // submap -> {first, current}: world_from_submap (column-major) when the tile appeared and now.
     matrices: () => Object.fromEntries([...tiles.values()].map((e) => [e.submap, {
       first: [...e.firstWorldFromSubmap.elements], current: [...e.worldFromSubmap.elements],

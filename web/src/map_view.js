@@ -12,7 +12,7 @@ import { isTerminalState, subscribeJobEvents } from './job_events.js';
 export async function openMapView(root, jobId) {
   const viewer = {
     jobId, ready: false, complete: false, state: null,
-    submapEvents: 0, revisionEvents: 0, tileLatenciesMs: [],
+    submapEvents: 0, revisionEvents: 0, previewEvents: 0, tileLatenciesMs: [],
   };
   window.glamViewer = viewer;
 
@@ -24,7 +24,7 @@ export async function openMapView(root, jobId) {
 
   const tiles = createMapTiles(scene, jobId, ({ tileVisible }) => {
     const c = tiles.counters;
-    if (tileVisible && submapEventAt.has(tileVisible.submap)) {
+    if (tileVisible && !tileVisible.open && submapEventAt.has(tileVisible.submap)) {
       // Split: waiting for the map revision that places the submap (alignment), fetching and
       // decoding the tile, drawing the next frame.
       const e = tileVisible;
@@ -38,7 +38,10 @@ export async function openMapView(root, jobId) {
       scene.fit();
       autoFitDone = true;
     }
-    stats.set({ revision: c.revision, tilesLoaded: c.tilesLoaded, pointsLoaded: c.pointsLoaded, disconnected: c.disconnected });
+    stats.set({
+      revision: c.revision, tilesLoaded: c.tilesLoaded, pointsLoaded: c.pointsLoaded, disconnected: c.disconnected,
+      openSubmap: c.openSubmap,
+    });
     // A map georeferenced while it is built: where it is, from the tileset, until report.json
     // (at the end) gives the fit's rms and the GeoJSON path too.
     const fromReport = viewer.location && viewer.location.rmsM !== null;
@@ -135,8 +138,14 @@ export async function openMapView(root, jobId) {
         viewer.revisionEvents += 1;
         tiles.sync(data.revision);
       },
+      // The submap being built grew: tileset.json lists its new provisional tile.
+      preview: () => {
+        viewer.previewEvents += 1;
+        tiles.sync();
+      },
     });
-    // A job without a map revision yet has no tileset (404); events will announce it.
+    // A job without a map revision yet has no tileset (404), or only the provisional tile of
+    // its first submap, which the next `preview` event announces.
     if (job.progress && job.progress.revision > 0) tiles.sync();
   }
   viewer.ready = true;

@@ -30,6 +30,10 @@ export function createStatsPanel(element) {
       ['revision', String(values.revision ?? 0)],
       ['submaps', `${formatCount(values.tilesLoaded)} shown${values.disconnected ? `, ${values.disconnected} disconnected` : ''}`],
       ['points', formatCount(values.pointsLoaded)],
+      // The submap being built, shown provisionally (slightly transparent) until it completes.
+      ['building', values.openSubmap
+        ? `submap ${values.openSubmap.submap}, ${values.openSubmap.keyframes ?? '?'} keyframes, ${formatCount(values.openSubmap.points)} points`
+        : '–'],
       ['render', values.renderFps ? `${values.renderFps.toFixed(0)} fps` : '–'],
     ];
     if (values.location) rows.push(['location', locationCell(values.location)]);

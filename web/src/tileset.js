@@ -43,6 +43,9 @@ export function parseTileset(json, baseUrl) {
       url: new URL(child.content.uri, baseUrl).toString(),
       worldFromSubmap,
       disconnected: Boolean(extras.disconnected),
+      // The submap being built (a provisional tile, replaced by the submap's own once placed).
+      open: Boolean(extras.open),
+      keyframes: Number.isInteger(extras.keyframes) ? extras.keyframes : null,
       box: child.boundingVolume && child.boundingVolume.box,
     });
   }
