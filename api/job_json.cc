@@ -137,6 +137,12 @@ JobOptions ParseJobOptions(const json& j) {
             "options.rolling_shutter_ms must be in [0, 100] milliseconds (0 = global shutter), got {}",
             *o.rolling_shutter_ms));
       }
+    } else if (key == "preview_interval_s") {
+      o.preview_interval_s = GetNumber(value, "preview_interval_s");
+      if (!(*o.preview_interval_s >= 0 && *o.preview_interval_s <= 60)) {
+        throw InputError(fmt::format("options.preview_interval_s must be in [0, 60] seconds (0 = off), got {}",
+                                     *o.preview_interval_s));
+      }
     } else if (key == "smooth_window_s") {
       o.smooth_window_s = GetNumber(value, "smooth_window_s");
       if (!(*o.smooth_window_s >= 0 && *o.smooth_window_s <= 5)) {
@@ -147,7 +153,7 @@ JobOptions ParseJobOptions(const json& j) {
       throw InputError(fmt::format(
           "options: unknown key \"{}\" (known: name, stride, focal, intrinsics, "
           "keyframes_per_submap, max_image_size, detect_every, fixed_k1, smooth_window_s, name_order, "
-          "refine_focal, max_features, global_refinement_keyframes, rolling_shutter_ms)",
+          "refine_focal, max_features, global_refinement_keyframes, rolling_shutter_ms, preview_interval_s)",
           key));
     }
   }
@@ -181,6 +187,7 @@ json ToJson(const JobOptions& o) {
   if (o.detect_every) j["detect_every"] = *o.detect_every;
   if (o.fixed_k1) j["fixed_k1"] = *o.fixed_k1;
   if (o.smooth_window_s) j["smooth_window_s"] = *o.smooth_window_s;
+  if (o.preview_interval_s) j["preview_interval_s"] = *o.preview_interval_s;
   if (o.name_order) j["name_order"] = *o.name_order;
   if (o.refine_focal) j["refine_focal"] = *o.refine_focal;
   if (o.max_features) j["max_features"] = *o.max_features;
@@ -205,6 +212,7 @@ MappingOptions ToMappingOptions(const JobOptions& o) {
   if (o.detect_every) m.detection_interval = *o.detect_every;
   if (o.fixed_k1 && *o.fixed_k1) m.submap.bundle_adjustment.refine_k1 = false;  // as --fixed-k1
   if (o.smooth_window_s) m.submap.centre_smoothing.half_window_s = *o.smooth_window_s;
+  if (o.preview_interval_s) m.preview.interval_s = *o.preview_interval_s;
   if (o.name_order && *o.name_order) m.source.photos_by_capture_time = false;  // as --name-order
   if (o.global_refinement_keyframes) m.global_refinement.max_keyframes = *o.global_refinement_keyframes;
   if (o.rolling_shutter_ms) {  // as --rolling-shutter-ms MS (0: a global shutter)

@@ -50,6 +50,9 @@ struct JobOptions {
   // (rolling_shutter_auto; the JSON value "auto").
   std::optional<double> rolling_shutter_ms;
   bool rolling_shutter_auto = false;
+  // At most this often (seconds) the submap being built is written as a provisional tile for
+  // viewers (`glam map --preview-interval`; default 1, 0 = off; at most 60).
+  std::optional<double> preview_interval_s;
 };
 
 // Upper bound of JobOptions::global_refinement_keyframes. Measured at 334 keyframes (2000
@@ -58,7 +61,7 @@ inline constexpr int kMaxGlobalRefinementKeyframes = 1000;
 
 // Accepts an object with the keys name, stride, focal, intrinsics, keyframes_per_submap,
 // max_image_size, detect_every, fixed_k1, smooth_window_s, name_order, refine_focal,
-// max_features, global_refinement_keyframes, rolling_shutter_ms (all optional). Throws InputError naming the key
+// max_features, global_refinement_keyframes, rolling_shutter_ms, preview_interval_s (all optional). Throws InputError naming the key
 // for unknown keys, wrong types or out-of-range values (the resulting MappingOptions are
 // Check()ed as well).
 JobOptions ParseJobOptions(const nlohmann::json& j);

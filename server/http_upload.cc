@@ -191,7 +191,7 @@ api::JobOptions RawBodyOptions(const httplib::Request& req) {
     } else {
       try {
         std::size_t used = 0;
-        if (key == "focal" || key == "smooth_window_s" || key == "rolling_shutter_ms") {
+        if (key == "focal" || key == "smooth_window_s" || key == "rolling_shutter_ms" || key == "preview_interval_s") {
           j[key] = std::stod(value, &used);
         } else {
           j[key] = std::stoll(value, &used);

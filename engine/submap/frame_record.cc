@@ -90,4 +90,13 @@ double MapCoverage(const std::vector<Eigen::Vector2f>& keypoints, const std::vec
   return textured > 0 ? static_cast<double>(explained) / textured : 1.0;
 }
 
+FramePose FrameRecord::ToFramePose() const {
+  FramePose pose;
+  pose.frame_index = index;
+  pose.timestamp_s = timestamp_s;
+  pose.cam_from_submap = cam_from_submap.value();
+  pose.pnp_inliers = static_cast<std::uint32_t>(landmark_matches.size());
+  return pose;
+}
+
 }  // namespace glam

@@ -14,6 +14,7 @@
 
 #include "engine/core/se3.h"
 #include "engine/features/features.h"
+#include "engine/map/keyframe.h"
 #include "engine/map/landmark.h"
 
 namespace glam {
@@ -69,6 +70,8 @@ struct FrameRecord {
     landmark_matches.clear();
     cam_from_previous_rotation.reset();
   }
+  // The submap's record of this posed frame (cam_from_submap must be set).
+  FramePose ToFramePose() const;
 };
 
 // How much of a frame's textured view the map covers: the image is cut into a grid of

@@ -250,12 +250,7 @@ Submap SubmapBuilder::Complete() {
       ++submap.stats.frames_unposed;
       continue;
     }
-    FramePose pose;
-    pose.frame_index = frame.index;
-    pose.timestamp_s = frame.timestamp_s;
-    pose.cam_from_submap = *frame.cam_from_submap;
-    pose.pnp_inliers = static_cast<std::uint32_t>(frame.landmark_matches.size());
-    submap.frame_poses.push_back(pose);
+    submap.frame_poses.push_back(frame.ToFramePose());
   }
   submap.stats.landmarks_removed = static_cast<std::uint32_t>(before - open_.landmarks.size());
   std::string focals;

@@ -24,13 +24,7 @@ std::optional<Submap> SubmapBuilder::OpenSubmapPreview(std::size_t min_keyframes
     preview.landmarks.push_back(std::move(copy));
   }
   for (const FrameRecord& frame : open_.frames) {
-    if (!frame.cam_from_submap) continue;
-    FramePose pose;
-    pose.frame_index = frame.index;
-    pose.timestamp_s = frame.timestamp_s;
-    pose.cam_from_submap = *frame.cam_from_submap;
-    pose.pnp_inliers = static_cast<std::uint32_t>(frame.landmark_matches.size());
-    preview.frame_poses.push_back(pose);
+    if (frame.cam_from_submap) preview.frame_poses.push_back(frame.ToFramePose());
   }
   return preview;
 }

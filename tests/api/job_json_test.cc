@@ -48,6 +48,11 @@ TEST(JobJson, ParsesOptionsAndMapsThemToEngineOptions) {
   EXPECT_EQ(ToMappingOptions(JobOptions{}).submap.centre_smoothing.half_window_s,
             CentreSmoothingOptions{}.half_window_s);
   EXPECT_EQ(ToJson(smooth), json::parse(R"({"smooth_window_s": 0.0})"));
+  // preview_interval_s paces the open submap's provisional tiles (as `glam map --preview-interval`).
+  const JobOptions no_preview = ParseJobOptionsText(R"({"preview_interval_s": 0})");
+  EXPECT_EQ(ToMappingOptions(no_preview).preview.interval_s, 0.0);
+  EXPECT_EQ(ToMappingOptions(JobOptions{}).preview.interval_s, OpenSubmapPreviewOptions{}.interval_s);
+  EXPECT_EQ(ToJson(no_preview), json::parse(R"({"preview_interval_s": 0.0})"));
   // name_order maps a photo job's photos in name order (as `glam map --name-order`).
   const JobOptions named = ParseJobOptionsText(R"({"name_order": true})");
   EXPECT_FALSE(ToMappingOptions(named).source.photos_by_capture_time);
@@ -123,6 +128,8 @@ TEST(JobJson, RejectsBadOptionsWithTheKeyInTheMessage) {
   EXPECT_NE(message(R"({"rolling_shutter_ms": "30"})").find("rolling_shutter_ms"), std::string::npos);
   EXPECT_NE(message(R"({"rolling_shutter_ms": "automatic"})").find("rolling_shutter_ms"), std::string::npos);
   EXPECT_NE(message(R"({"smooth_window_s": -0.1})").find("smooth_window_s"), std::string::npos);
+  EXPECT_NE(message(R"({"preview_interval_s": 61})").find("preview_interval_s"), std::string::npos);
+  EXPECT_NE(message(R"({"preview_interval_s": "often"})").find("preview_interval_s"), std::string::npos);
   EXPECT_NE(message(R"({"smooth_window_s": 6})").find("smooth_window_s"), std::string::npos);
   EXPECT_NE(message(R"({"smooth_window_s": "0.5"})").find("smooth_window_s"), std::string::npos);
   EXPECT_NE(message(R"({"intrinsics": {"model": "pinhole"}})").find("width"), std::string::npos);
