@@ -23,6 +23,24 @@ json Box(const Eigen::AlignedBox3d& box) {
   return json::array({c.x(), c.y(), c.z(), h.x(), 0.0, 0.0, 0.0, h.y(), 0.0, 0.0, 0.0, h.z()});
 }
 
+// One child tile: `box` in the submap frame, placed by world_from_submap; grows `world`.
+json Child(const Eigen::AlignedBox3d& box, const Sim3& world_from_submap, std::string uri, json extras,
+           Eigen::AlignedBox3d* world) {
+  const double floor_half = MinHalfSize(box);
+  const Eigen::AlignedBox3d padded(box.min().array() - floor_half, box.max().array() + floor_half);
+  for (int k = 0; k < 8; ++k) {
+    world->extend(world_from_submap * padded.corner(static_cast<Eigen::AlignedBox3d::CornerType>(k)));
+  }
+  json child;
+  child["boundingVolume"] = {{"box", Box(box)}};
+  child["geometricError"] = 0.0;
+  child["refine"] = "ADD";
+  child["transform"] = ColumnMajor(world_from_submap.matrix());
+  child["content"] = {{"uri", std::move(uri)}};
+  child["extras"] = std::move(extras);
+  return child;
+}
+
 }  // namespace
 
 std::string TileFileName(std::uint32_t submap_id, TileVariant variant) {
@@ -50,24 +68,6 @@ json ColumnMajor(const Eigen::Matrix4d& m) {
     for (int row = 0; row < 4; ++row) out.push_back(m(row, col));
   }
   return out;
-}
-
-// One child tile (file-local): `box` in the submap frame, placed by world_from_submap; grows `world`.
-static json Child(const Eigen::AlignedBox3d& box, const Sim3& world_from_submap, std::string uri, json extras,
-           Eigen::AlignedBox3d* world) {
-  const double floor_half = MinHalfSize(box);
-  const Eigen::AlignedBox3d padded(box.min().array() - floor_half, box.max().array() + floor_half);
-  for (int k = 0; k < 8; ++k) {
-    world->extend(world_from_submap * padded.corner(static_cast<Eigen::AlignedBox3d::CornerType>(k)));
-  }
-  json child;
-  child["boundingVolume"] = {{"box", Box(box)}};
-  child["geometricError"] = 0.0;
-  child["refine"] = "ADD";
-  child["transform"] = ColumnMajor(world_from_submap.matrix());
-  child["content"] = {{"uri", std::move(uri)}};
-  child["extras"] = std::move(extras);
-  return child;
 }
 
 json BuildTileset(const MapSnapshot& snapshot, const std::map<std::uint32_t, Eigen::AlignedBox3d>& bounds,
