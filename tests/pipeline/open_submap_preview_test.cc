@@ -80,7 +80,7 @@ TEST(OpenSubmapPreview, ALoopIsShownWhileEachSubmapIsBuiltAndWhereTheGroundIs) {
   const fs::path out = testing::FreshTempDir("open_submap_preview");
   MappingOptions options;
   UseCalibration(&options, ReadIntrinsicsJson(kClip / "intrinsics.json"));
-  options.preview.interval_s = 0.5;
+  options.preview.interval_s = 0.1;  // several previews per submap on a fast machine too
   std::vector<SeenPreview> seen;
   std::int64_t previews = 0;
   const MappingReport report = RunMapping(kClip / "video.mp4", out, options, [&](const MappingProgress& p) {
