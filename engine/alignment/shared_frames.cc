@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <array>
-#include <cmath>
 #include <unordered_map>
 #include <utility>
 
@@ -12,6 +11,7 @@
 #include "engine/core/median.h"
 #include "engine/core/options.h"
 #include "engine/core/similarity_alignment.h"
+#include "engine/features/feature_grid.h"
 
 namespace glam {
 
@@ -19,26 +19,44 @@ void SharedFrameOptions::Check() const {
   CheckGreater("SharedFrameOptions.max_disagreement_fraction", max_disagreement_fraction, 0.0);
 }
 
+namespace {
+
+// A frame posed in both submaps (a = reference, b = query), in query order.
+struct SharedFrame {
+  std::int64_t frame_index = 0;
+  SE3 a_from_cam;  // reference submap_from_cam
+  SE3 b_from_cam;  // query submap_from_cam
+};
+
+std::vector<SharedFrame> SharedFrames(const Submap& reference, const Submap& query) {
+  std::unordered_map<std::int64_t, const FramePose*> in_reference;
+  for (const FramePose& pose : reference.frame_poses) in_reference[pose.frame_index] = &pose;
+  std::vector<SharedFrame> out;
+  for (const FramePose& pose : query.frame_poses) {
+    const auto it = in_reference.find(pose.frame_index);
+    if (it != in_reference.end()) {
+      out.push_back({pose.frame_index, it->second->cam_from_submap.Inverse(), pose.cam_from_submap.Inverse()});
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
 std::vector<LandmarkMatch> SharedFrameMatches(const Submap& reference, const Submap& query,
                                               const Sim3& reference_from_query,
                                               const SharedFrameOptions& options) {
   options.Check();
   std::vector<LandmarkMatch> out;
   if (query.first_frame > reference.last_frame || reference_from_query.scale() <= 0) return out;
-  std::unordered_map<std::int64_t, const FramePose*> in_reference;
-  for (const FramePose& pose : reference.frame_poses) in_reference[pose.frame_index] = &pose;
   const double depth_a = SubmapDepthScale(reference);
   const double depth_b = depth_a / reference_from_query.scale();
   const double max_error = options.max_disagreement_fraction * depth_a;
-  for (const FramePose& pose_b : query.frame_poses) {
-    const auto it = in_reference.find(pose_b.frame_index);
-    if (it == in_reference.end() || pose_b.frame_index < 0 ||
-        pose_b.frame_index >= kMaxSharedFrameIndex) {
-      continue;
-    }
-    const auto id = kSharedFrameIdBase + 2 * static_cast<std::uint32_t>(pose_b.frame_index);
-    const SE3 submap_a_from_cam = it->second->cam_from_submap.Inverse();
-    const SE3 submap_b_from_cam = pose_b.cam_from_submap.Inverse();
+  for (const SharedFrame& frame : SharedFrames(reference, query)) {
+    if (frame.frame_index < 0 || frame.frame_index >= kMaxSharedFrameIndex) continue;
+    const auto id = kSharedFrameIdBase + 2 * static_cast<std::uint32_t>(frame.frame_index);
+    const SE3& submap_a_from_cam = frame.a_from_cam;
+    const SE3& submap_b_from_cam = frame.b_from_cam;
     const Eigen::Vector3d centre_a = submap_a_from_cam.translation();
     const Eigen::Vector3d centre_b = submap_b_from_cam.translation();
     const Eigen::Vector3d ahead_a = submap_a_from_cam * Eigen::Vector3d(0, 0, depth_a);
@@ -55,18 +73,6 @@ std::vector<LandmarkMatch> SharedFrameMatches(const Submap& reference, const Sub
 
 namespace {
 
-// The frames posed in both submaps: (reference submap_from_cam, query submap_from_cam).
-std::vector<std::pair<SE3, SE3>> SharedFramePoses(const Submap& reference, const Submap& query) {
-  std::unordered_map<std::int64_t, const FramePose*> in_reference;
-  for (const FramePose& pose : reference.frame_poses) in_reference[pose.frame_index] = &pose;
-  std::vector<std::pair<SE3, SE3>> out;
-  for (const FramePose& pose : query.frame_poses) {
-    const auto it = in_reference.find(pose.frame_index);
-    if (it != in_reference.end()) out.emplace_back(it->second->cam_from_submap.Inverse(), pose.cam_from_submap.Inverse());
-  }
-  return out;
-}
-
 // The points a shared frame pins in a submap (submap_from_cam, the depth ahead in that
 // submap's units): its centre, the point one depth ahead on the optical axis and the point
 // beside that along the image x axis. Three points fix the frame's whole orientation: the
@@ -81,15 +87,15 @@ std::array<Eigen::Vector3d, 3> FramePoints(const SE3& submap_from_cam, double de
 // Umeyama fit of the FramePoints of the frames with used[i] (depth_a in the reference,
 // depth_a / scale in the query); with fixed_scale the similarity keeps `scale` and fits rotation
 // and translation only. Unset when degenerate.
-std::optional<SimilarityAlignmentResult> FitSharedFrames(const std::vector<std::pair<SE3, SE3>>& shared,
+std::optional<SimilarityAlignmentResult> FitSharedFrames(const std::vector<SharedFrame>& shared,
                                                          const std::vector<char>& used, double depth_a,
                                                          double scale, bool fixed_scale) {
   std::vector<Eigen::Vector3d> source, target;
   const double pre_scale = fixed_scale ? scale : 1.0;
   for (std::size_t i = 0; i < shared.size(); ++i) {
     if (!used[i]) continue;
-    for (const Eigen::Vector3d& p : FramePoints(shared[i].first, depth_a)) target.push_back(p);
-    for (const Eigen::Vector3d& p : FramePoints(shared[i].second, depth_a / scale)) source.push_back(pre_scale * p);
+    for (const Eigen::Vector3d& p : FramePoints(shared[i].a_from_cam, depth_a)) target.push_back(p);
+    for (const Eigen::Vector3d& p : FramePoints(shared[i].b_from_cam, depth_a / scale)) source.push_back(pre_scale * p);
   }
   if (source.size() < 3) return std::nullopt;
   try {
@@ -105,9 +111,9 @@ std::optional<SimilarityAlignmentResult> FitSharedFrames(const std::vector<std::
 }
 
 // How far `a_from_b` misses frame i's points (the largest of the three).
-double FrameError(const std::pair<SE3, SE3>& frame, const Sim3& a_from_b, double depth_a) {
-  const auto a = FramePoints(frame.first, depth_a);
-  const auto b = FramePoints(frame.second, depth_a / a_from_b.scale());
+double FrameError(const SharedFrame& frame, const Sim3& a_from_b, double depth_a) {
+  const auto a = FramePoints(frame.a_from_cam, depth_a);
+  const auto b = FramePoints(frame.b_from_cam, depth_a / a_from_b.scale());
   double worst = 0;
   for (std::size_t k = 0; k < a.size(); ++k) worst = std::max(worst, (a_from_b * b[k] - a[k]).norm());
   return worst;
@@ -141,7 +147,7 @@ std::vector<ProjectedLandmark> ProjectLandmarks(const Submap& submap, const SE3&
 // camera centres, whose spread over the few shared frames is short and noisy (1-2 % scale
 // error measured on the loop fixture), every pair measures the full viewing depth.
 std::optional<double> DepthRatioScale(const Submap& reference, const Submap& query,
-                                      const std::vector<std::pair<SE3, SE3>>& shared) {
+                                      const std::vector<SharedFrame>& shared) {
   constexpr double kRadiusPx = 2.0;
   constexpr std::size_t kMaxFrames = 8;
   constexpr std::size_t kMinPairs = 20;
@@ -149,25 +155,21 @@ std::optional<double> DepthRatioScale(const Submap& reference, const Submap& que
   std::vector<double> ratios;
   const std::size_t step = std::max<std::size_t>(1, shared.size() / kMaxFrames);
   for (std::size_t i = 0; i < shared.size(); i += step) {
-    const std::vector<ProjectedLandmark> a = ProjectLandmarks(reference, shared[i].first.Inverse());
-    const std::vector<ProjectedLandmark> b = ProjectLandmarks(query, shared[i].second.Inverse());
-    // Reference projections bucketed by kRadiusPx cells; a query point looks in the 3 x 3 cells around it.
-    std::unordered_map<std::int64_t, std::vector<const ProjectedLandmark*>> grid;
-    const auto cell = [](double v) { return static_cast<std::int64_t>(std::floor(v / kRadiusPx)); };
-    const auto key = [](std::int64_t x, std::int64_t y) { return x * 1000003 + y; };
-    for (const ProjectedLandmark& p : a) grid[key(cell(p.pixel.x()), cell(p.pixel.y()))].push_back(&p);
+    const std::vector<ProjectedLandmark> a = ProjectLandmarks(reference, shared[i].a_from_cam.Inverse());
+    const std::vector<ProjectedLandmark> b = ProjectLandmarks(query, shared[i].b_from_cam.Inverse());
+    std::vector<Eigen::Vector2d> a_pixels;
+    a_pixels.reserve(a.size());
+    for (const ProjectedLandmark& p : a) a_pixels.push_back(p.pixel);
+    const FeatureGrid grid(a_pixels, reference.intrinsics.width, reference.intrinsics.height, kRadiusPx);
+    std::vector<int> near;
     for (const ProjectedLandmark& q : b) {
+      near.clear();
+      grid.Query(q.pixel, kRadiusPx, &near);
       const ProjectedLandmark* best = nullptr;
       double best_distance = kRadiusPx;
-      for (std::int64_t dx = -1; dx <= 1; ++dx) {
-        for (std::int64_t dy = -1; dy <= 1; ++dy) {
-          const auto it = grid.find(key(cell(q.pixel.x()) + dx, cell(q.pixel.y()) + dy));
-          if (it == grid.end()) continue;
-          for (const ProjectedLandmark* p : it->second) {
-            const double d = (p->pixel - q.pixel).norm();
-            if (d < best_distance) best_distance = d, best = p;
-          }
-        }
+      for (const int k : near) {
+        const double d = (grid.point(k) - q.pixel).norm();
+        if (d < best_distance) best_distance = d, best = &a[static_cast<std::size_t>(k)];
       }
       if (best != nullptr) ratios.push_back(best->depth / q.depth);
     }
@@ -181,7 +183,7 @@ std::optional<double> DepthRatioScale(const Submap& reference, const Submap& que
 std::optional<Sim3> EstimateFromSharedFrames(const Submap& reference, const Submap& query,
                                              const SharedFrameOptions& options) {
   options.Check();
-  const std::vector<std::pair<SE3, SE3>> shared = SharedFramePoses(reference, query);
+  const std::vector<SharedFrame> shared = SharedFrames(reference, query);
   if (shared.size() < 2) return std::nullopt;
   const double depth_a = SubmapDepthScale(reference);
   const double max_error = options.max_disagreement_fraction * depth_a;

@@ -43,7 +43,6 @@ bool OpenSubmapPreviewer::Update(const SubmapBuilder& builder) {
   } else if (id != 0) {
     return false;  // after a tracking loss: no shared frames, placed by alignment once complete
   }
-  const Clock::time_point start = now;
   std::optional<Submap> preview = builder.OpenSubmapPreview(static_cast<std::size_t>(options_.min_keyframes));
   if (!preview) return false;
   keyframes_seen_ = keyframes;
@@ -65,7 +64,7 @@ bool OpenSubmapPreviewer::Update(const SubmapBuilder& builder) {
   last_keyframes_ = static_cast<std::int64_t>(preview->keyframes.size());
   GLAM_LOG_DEBUG("open submap {} previewed: {} keyframes, {} landmarks, {} frames posed, {:.1f} ms", preview->id,
                  preview->keyframes.size(), preview->landmarks.size(), preview->frame_poses.size(),
-                 1e3 * std::chrono::duration<double>(Clock::now() - start).count());
+                 1e3 * std::chrono::duration<double>(Clock::now() - now).count());
   return true;
 }
 

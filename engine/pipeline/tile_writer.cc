@@ -27,6 +27,14 @@ std::vector<Eigen::Vector3d> CameraCentres(const Submap& submap) {
   return centres;
 }
 
+// The snapshot's placement of submap `id`, or null.
+const SubmapPlacement* FindPlacement(const MapSnapshot& snapshot, std::uint32_t id) {
+  for (const SubmapPlacement& p : snapshot.submaps) {
+    if (p.id == id) return &p;
+  }
+  return nullptr;
+}
+
 }  // namespace
 
 TileGeometry SubmapTileGeometry(const Submap& submap) {
@@ -105,13 +113,7 @@ void TileWriter::WriteTilesets(const MapSnapshot& snapshot) {
 
 std::optional<OpenTile> TileWriter::PlacedPreview(const MapSnapshot& snapshot) {
   if (!preview_) return std::nullopt;
-  const auto placement_of = [&snapshot](std::uint32_t id) -> const SubmapPlacement* {
-    for (const SubmapPlacement& p : snapshot.submaps) {
-      if (p.id == id) return &p;
-    }
-    return nullptr;
-  };
-  if (placement_of(preview_->tile.submap) != nullptr) {  // its own tile is listed now
+  if (FindPlacement(snapshot, preview_->tile.submap) != nullptr) {  // its own tile is listed now
     RemovePreviewFiles(preview_->tile.submap);
     preview_.reset();
     return std::nullopt;
@@ -121,7 +123,7 @@ std::optional<OpenTile> TileWriter::PlacedPreview(const MapSnapshot& snapshot) {
     tile.world_from_submap = preview_->anchor_from_submap;
     return tile;
   }
-  const SubmapPlacement* anchor = placement_of(*preview_->anchor);
+  const SubmapPlacement* anchor = FindPlacement(snapshot, *preview_->anchor);
   if (anchor == nullptr || anchor->disconnected) return std::nullopt;
   tile.world_from_submap = anchor->world_from_submap * preview_->anchor_from_submap;
   return tile;
@@ -131,9 +133,7 @@ bool TileWriter::OnOpenSubmapPreview(const Submap& preview, std::optional<std::u
                                      const Sim3& anchor_from_submap) {
   std::lock_guard lock(mutex_);
   if (anchor && !PlacedLocked(*anchor)) return false;
-  for (const SubmapPlacement& p : last_snapshot_.submaps) {
-    if (p.id == preview.id) return false;  // completed and placed already
-  }
+  if (FindPlacement(last_snapshot_, preview.id) != nullptr) return false;  // completed and placed already
   const TileGeometry geometry = SubmapTileGeometry(preview);
   if (geometry.points.empty()) return false;
   if (preview_ && preview_->tile.submap != preview.id) RemovePreviewFiles(preview_->tile.submap);
@@ -154,10 +154,8 @@ bool TileWriter::OnOpenSubmapPreview(const Submap& preview, std::optional<std::u
 }
 
 bool TileWriter::PlacedLocked(std::uint32_t id) const {
-  for (const SubmapPlacement& p : last_snapshot_.submaps) {
-    if (p.id == id) return !p.disconnected;
-  }
-  return false;
+  const SubmapPlacement* placement = FindPlacement(last_snapshot_, id);
+  return placement != nullptr && !placement->disconnected;
 }
 
 bool TileWriter::placed(std::uint32_t id) const {

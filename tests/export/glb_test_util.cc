@@ -181,4 +181,13 @@ std::string ReadBytes(const std::filesystem::path& path) {
   return ss.str();
 }
 
+Eigen::Matrix4d FromColumnMajor(const nlohmann::json& a) {
+  EXPECT_EQ(a.size(), 16u);
+  Eigen::Matrix4d m = Eigen::Matrix4d::Zero();
+  for (std::size_t col = 0; col < 4 && a.size() == 16; ++col) {
+    for (std::size_t row = 0; row < 4; ++row) m(row, col) = a[col * 4 + row].get<double>();
+  }
+  return m;
+}
+
 }  // namespace glam::testing

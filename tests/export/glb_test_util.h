@@ -43,4 +43,7 @@ nlohmann::json ValidateGltf(const std::filesystem::path& file);
 
 std::string ReadBytes(const std::filesystem::path& path);
 
+// A tileset `transform` (16 numbers, column-major) as a matrix; fails the test on another size.
+Eigen::Matrix4d FromColumnMajor(const nlohmann::json& a);
+
 }  // namespace glam::testing

@@ -61,13 +61,7 @@ SubmapPlacement Place(std::uint32_t id, double scale, double yaw, Eigen::Vector3
 
 json ReadJson(const fs::path& path) { return json::parse(glam::testing::ReadBytes(path)); }
 
-Eigen::Matrix4d FromColumnMajor(const json& a) {
-  Eigen::Matrix4d m;
-  for (int col = 0; col < 4; ++col) {
-    for (int row = 0; row < 4; ++row) m(row, col) = a[static_cast<std::size_t>(col * 4 + row)].get<double>();
-  }
-  return m;
-}
+using glam::testing::FromColumnMajor;
 
 // Reads tile `id` from disk as a 3D Tiles client would (quantized variant: dequantize, y-up ->
 // z-up happens in DequantizePoints) and places its points with the tileset's transform; every

@@ -10,6 +10,7 @@
 
 #include "engine/export/glb_tile.h"
 #include "engine/export/tileset.h"
+#include "tests/export/glb_test_util.h"
 
 namespace glam {
 namespace {
@@ -32,14 +33,7 @@ std::vector<Eigen::Vector3d> RandomPoints(std::mt19937& rng, int n) {
   return out;
 }
 
-Eigen::Matrix4d FromColumnMajor(const json& a) {
-  EXPECT_EQ(a.size(), 16u);
-  Eigen::Matrix4d m;
-  for (int col = 0; col < 4; ++col) {
-    for (int row = 0; row < 4; ++row) m(row, col) = a[static_cast<std::size_t>(col * 4 + row)].get<double>();
-  }
-  return m;
-}
+using glam::testing::FromColumnMajor;
 
 // Point inside an axis-aligned 3D Tiles box [c, x-half, y-half, z-half] (relative tolerance).
 bool InBox(const json& box, const Eigen::Vector3d& p) {

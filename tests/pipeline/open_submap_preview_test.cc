@@ -48,15 +48,6 @@ const json* OpenChild(const json& tileset) {
   return nullptr;
 }
 
-Sim3 FromColumnMajor(const json& m) {
-  Eigen::Matrix4d matrix;
-  for (int col = 0; col < 4; ++col) {
-    for (int row = 0; row < 4; ++row) matrix(row, col) = m.at(4 * col + row).get<double>();
-  }
-  const double scale = matrix.block<3, 1>(0, 0).norm();
-  return Sim3(scale, SO3(Eigen::Matrix3d(matrix.block<3, 3>(0, 0) / scale)), matrix.block<3, 1>(0, 3));
-}
-
 SeenPreview ReadPreview(const fs::path& out, const MappingProgress& progress) {
   const json tileset = json::parse(std::ifstream(out / "tileset.json"));
   const json* child = OpenChild(tileset);
@@ -68,9 +59,9 @@ SeenPreview ReadPreview(const fs::path& out, const MappingProgress& progress) {
   seen.submaps_completed = progress.submaps_completed;
   seen.uri = child->at("content").at("uri");
   const std::string file = seen.uri.substr(0, seen.uri.find('?'));
-  const Sim3 world_from_submap = FromColumnMajor(child->at("transform"));
+  const Eigen::Matrix4d world_from_submap = testing::FromColumnMajor(child->at("transform"));
   for (ColoredPoint p : testing::DecodeDracoPoints(testing::ParseGlb(testing::ReadBytes(out / file)))) {
-    p.position = (world_from_submap * p.position.cast<double>()).cast<float>();
+    p.position = (world_from_submap * p.position.cast<double>().homogeneous()).head<3>().cast<float>();
     seen.world_points.push_back(p);
   }
   return seen;
