@@ -460,6 +460,7 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   report.parts = exported.parts;
   report.points = exported.points;
   report.tracking_losses = stats.tracking_losses;
+  report.frames_matched_globally = stats.frames_matched_globally;
   report.frames_rotation_only = stats.frames_rotation_only;
   report.submap_rebuilds = stats.submap_rebuilds;
   report.bootstrap_twin_checks = stats.bootstrap_twin_checks;

@@ -246,6 +246,7 @@ nlohmann::json MappingReport::ToJson() const {
           {"parts", PartsJson(parts)},
           {"points", points},
           {"tracking_losses", tracking_losses},
+          {"frames_matched_globally", frames_matched_globally},
           {"frames_rotation_only", frames_rotation_only},
           {"submap_rebuilds", submap_rebuilds},
           {"bootstrap_twin_checks", bootstrap_twin_checks},

@@ -59,6 +59,8 @@ struct MappingReport {
   std::vector<PartExport> parts;
   std::int64_t points = 0;
   std::int64_t tracking_losses = 0;
+  // Frames whose guided matching failed, matched against all landmarks instead.
+  std::int64_t frames_matched_globally = 0;
   // Frames posed by rotation only through a hovering yaw (SubmapOptions::hover_max_speed).
   std::int64_t frames_rotation_only = 0;
   std::int64_t submap_rebuilds = 0;  // submaps tracked again after the focal estimate moved

@@ -18,6 +18,7 @@
 #include "engine/geometry/essential.h"
 #include "engine/geometry/rotation_only.h"
 #include "engine/geometry/triangulation.h"
+#include "engine/submap/motion_prediction.h"
 #include "engine/submap/submap_builder.h"
 
 namespace glam {
@@ -51,6 +52,19 @@ std::vector<TwoViewCorrespondence> Rays(const Camera& camera, const FrameRecord&
                     camera.Unproject(second.features.points[m.query].cast<double>()).head<2>()});
   }
   return rays;
+}
+
+// How far (0-1) `frame` lies in time between `first` and `second` (frames dropped from a
+// stream leave gaps that frame positions would not show); by frame number if the times do
+// not increase.
+double FractionOfTheWay(const FrameRecord& first, const FrameRecord& frame, const FrameRecord& second) {
+  double span = second.timestamp_s - first.timestamp_s;
+  double part = frame.timestamp_s - first.timestamp_s;
+  if (!(span > 0) || !std::isfinite(span) || !std::isfinite(part)) {
+    span = static_cast<double>(second.index - first.index);
+    part = static_cast<double>(frame.index - first.index);
+  }
+  return span > 0 ? std::clamp(part / span, 0.0, 1.0) : 0.0;
 }
 
 }  // namespace
@@ -223,7 +237,7 @@ bool SubmapBuilder::TryBootstrap() {
 
   // Frames between the two keyframes are localised against the new landmarks in order, each
   // guided first by a constant-velocity prediction off the two frames before it (the first by
-  // the pose interpolated between the keyframes). Frames after the second keyframe (a past best
+  // the pose interpolated between the keyframes), both in time (motion_prediction.h). Frames after the second keyframe (a past best
   // candidate) are tracked in order.
   const SE3 cam1_from_submap = *open_.frames[kf1_position].cam_from_submap;  // submap = cam0
   for (std::size_t p = 1; p < open_.frames.size(); ++p) {
@@ -233,9 +247,11 @@ bool SubmapBuilder::TryBootstrap() {
       SE3 predicted;
       const auto& previous = open_.frames[p - 1].cam_from_submap;
       if (p >= 2 && previous && open_.frames[p - 2].cam_from_submap) {
-        predicted = ExtrapolateConstantVelocity(*open_.frames[p - 2].cam_from_submap, *previous);
+        const FrameRecord& before = open_.frames[p - 2];
+        predicted = ExtrapolateConstantVelocity(*before.cam_from_submap, before.timestamp_s, *previous,
+                                                open_.frames[p - 1].timestamp_s, f.timestamp_s);
       } else {
-        const double t = static_cast<double>(p) / static_cast<double>(kf1_position);
+        const double t = FractionOfTheWay(open_.frames[0], f, open_.frames[kf1_position]);
         const SO3 rotation = SO3::Exp(t * cam1_from_submap.rotation().Log());
         predicted = SE3(rotation, -(rotation * (t * CameraCenter(cam1_from_submap))));
       }

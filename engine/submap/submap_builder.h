@@ -39,6 +39,9 @@ struct SubmapBuilderStats {
   std::int64_t submaps_completed = 0;
   std::int64_t submaps_discarded = 0;  // closed with < 3 keyframes
   std::int64_t tracking_losses = 0;
+  // Tracked frames whose guided matching around the predicted pose failed, so they were
+  // matched against every landmark of the open submap (25-70 ms each; posed or not).
+  std::int64_t frames_matched_globally = 0;
   std::int64_t frames_rotation_only = 0;  // posed by rotation only (SubmapOptions::hover_max_speed)
   std::int64_t submap_rebuilds = 0;  // open submaps tracked again after a focal or k1 change
   // SubmapOptions::bootstrap_twin_*: open submaps tracked again from the other motion of a
@@ -263,9 +266,9 @@ class SubmapBuilder {
   // Guided from `predicted` (when given), then against all landmarks (25-70 ms per frame) only
   // if that fails.
   bool LocaliseGuidedFirst(FrameRecord& record, std::optional<SE3> predicted) const;
-  // Constant-velocity prediction from the newest posed frames before the one being tracked.
+  // Constant-velocity prediction (motion_prediction.h) from the newest two posed frames before
+  // the one being tracked (the newest frame of the open submap), to that frame's time.
   std::optional<SE3> PredictPose() const;
-  static SE3 ExtrapolateConstantVelocity(const SE3& cam_before_from_submap, const SE3& cam_last_from_submap);
 
   // tracking_rotation.cc (SubmapOptions::hover_max_speed): poses the frame at `position`, which
   // tracking could not pose, by rotation only from the frame before it when the drone was

@@ -2,7 +2,9 @@
 // the frame or seen from a very different angle than when they were created are dropped, the
 // rest are matched to the frame's features near their projection, and EPnP inside RANSAC gives
 // the pose. The paper predicts with the previous pose; a constant-velocity prediction is used
-// here (same thing for a hovering camera, better for a moving one). When guided matching
+// here (same thing for a hovering camera, better for a moving one), scaled to the time since
+// the last posed frame (engine/submap/motion_prediction.h: streams drop frames, and frames
+// tracking could not pose leave gaps). When guided matching
 // finds too little (fast motion, a jump), matching against all landmarks is tried once before
 // tracking is declared lost.
 #include <cmath>
@@ -11,6 +13,7 @@
 #include "engine/features/feature_matcher.h"
 #include "engine/features/guided_matcher.h"
 #include "engine/geometry/absolute_pose.h"
+#include "engine/submap/motion_prediction.h"
 #include "engine/submap/submap_builder.h"
 
 namespace glam {
@@ -30,17 +33,16 @@ std::optional<SE3> SubmapBuilder::PredictPose() const {
   }
   if (last == nullptr) return std::nullopt;
   if (before == nullptr) return last->cam_from_submap;
-  return ExtrapolateConstantVelocity(*before->cam_from_submap, *last->cam_from_submap);
+  return ExtrapolateConstantVelocity(*before->cam_from_submap, before->timestamp_s, *last->cam_from_submap,
+                                     last->timestamp_s, open_.frames.back().timestamp_s);
 }
 
-SE3 SubmapBuilder::ExtrapolateConstantVelocity(const SE3& cam_before_from_submap, const SE3& cam_last_from_submap) {
-  // cam_last_from_cam_before, applied once more (scaled to the frame gap would need
-  // interpolation on SE3; gaps are equal at a fixed stride).
-  const SE3 cam_last_from_cam_before = cam_last_from_submap * cam_before_from_submap.Inverse();
-  return cam_last_from_cam_before * cam_last_from_submap;
+bool SubmapBuilder::Track(FrameRecord& record) {
+  const std::optional<SE3> predicted = PredictPose();
+  if (predicted && Localise(record, predicted)) return true;
+  if (predicted) ++stats_.frames_matched_globally;
+  return Localise(record, std::nullopt);
 }
-
-bool SubmapBuilder::Track(FrameRecord& record) { return LocaliseGuidedFirst(record, PredictPose()); }
 
 bool SubmapBuilder::LocaliseGuidedFirst(FrameRecord& record, std::optional<SE3> predicted) const {
   if (predicted && Localise(record, predicted)) return true;

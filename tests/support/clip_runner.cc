@@ -2,6 +2,8 @@
 
 #include <atomic>
 #include <cstdio>
+#include <memory>
+#include <utility>
 #include <thread>
 
 #include "engine/pipeline/decoder_worker.h"
@@ -10,12 +12,48 @@
 #include "engine/video/frame_source.h"
 
 namespace glam::test_support {
+namespace {
+
+// The frames of `source` except those `skip` names, as a live stream that dropped them
+// delivers the rest (indices and times unchanged, so the gaps show).
+class SkippingSource : public FrameSource {
+ public:
+  SkippingSource(FrameSource& source, std::function<bool(std::int64_t)> skip)
+      : source_(source), skip_(std::move(skip)) {}
+  std::optional<Frame> Next() override {
+    while (std::optional<Frame> frame = source_.Next()) {
+      if (!skip_(frame->index)) {
+        ++delivered_;
+        return frame;
+      }
+      ++skipped_;
+    }
+    return std::nullopt;
+  }
+  const FrameSourceInfo& info() const override { return source_.info(); }
+  void SeekTo(int64_t index) override { source_.SeekTo(index); }
+  int64_t frames_delivered() const override { return delivered_; }
+  bool ended_early() const override { return source_.ended_early(); }
+  int64_t frames_dropped() const override { return skipped_; }
+
+ private:
+  FrameSource& source_;
+  std::function<bool(std::int64_t)> skip_;
+  int64_t delivered_ = 0;
+  int64_t skipped_ = 0;
+};
+
+}  // namespace
 
 ClipRun RunSubmapBuilderOnClip(const std::filesystem::path& video, const Intrinsics& intrinsics,
                                const SubmapOptions& options, int detection_interval,
-                               std::int64_t max_frames, const SiftOptions& sift) {
+                               std::int64_t max_frames, const SiftOptions& sift,
+                               const std::function<bool(std::int64_t)>& skip_frame) {
   SubmapBuilder builder(intrinsics, options);
-  auto source = OpenFrameSource(video);
+  std::unique_ptr<FrameSource> opened = OpenFrameSource(video);
+  std::unique_ptr<FrameSource> skipping;
+  if (skip_frame) skipping = std::make_unique<SkippingSource>(*opened, skip_frame);
+  FrameSource* source = skipping ? skipping.get() : opened.get();
   MappingOptions mapping;
   mapping.detection_interval = detection_interval;
   FeatureStageOptions stage;

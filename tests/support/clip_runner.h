@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <vector>
 
 #include "engine/core/camera.h"
@@ -24,8 +25,11 @@ struct ClipRun {
 
 // detection_interval: 0 = the product's automatic schedule, 1 = SIFT on every frame (paper).
 // max_frames < 0: the whole video. sift: the feature stage's SIFT (the product's by default).
+// skip_frame: frames for which it returns true never reach the feature stage or the builder,
+// as a live stream drops them (their indices and times are missing from the sequence).
 ClipRun RunSubmapBuilderOnClip(const std::filesystem::path& video, const Intrinsics& intrinsics,
                                const SubmapOptions& options, int detection_interval,
-                               std::int64_t max_frames = -1, const SiftOptions& sift = SiftOptions());
+                               std::int64_t max_frames = -1, const SiftOptions& sift = SiftOptions(),
+                               const std::function<bool(std::int64_t frame_index)>& skip_frame = {});
 
 }  // namespace glam::test_support
