@@ -32,6 +32,8 @@ const JOB_TIMEOUT_MS = 180_000;
 const KEYFRAMES_PER_SUBMAP = 4;
 // A path smoothing other than the default, entered in the form, must reach the job options.
 const SMOOTH_WINDOW_S = 0.3;
+// A preview interval other than the default (1 s), entered in the form, must reach the job.
+const PREVIEW_INTERVAL_S = 0.5;
 // The product's default budget, sent explicitly: checks that the form's field reaches the job.
 const MAX_FEATURES = 2000;
 
@@ -238,6 +240,7 @@ async function main() {
     await page.click('#upload-form summary');
     await page.fill('#upload-form input[name=keyframes_per_submap]', String(KEYFRAMES_PER_SUBMAP));
     await page.fill('#upload-form input[name=smooth_window_s]', String(SMOOTH_WINDOW_S));
+    await page.fill('#upload-form input[name=preview_interval_s]', String(PREVIEW_INTERVAL_S));
     // The form refuses an option that cannot apply before uploading anything: refining the
     // focal of intrinsics that were not given.
     await page.check('#upload-form input[name=refine_focal]');
@@ -412,6 +415,8 @@ async function main() {
     console.log(`job table: ${shownWarnings.length} warning(s) shown`);
     check(job.options && job.options.smooth_window_s === SMOOTH_WINDOW_S,
       `the form's path smoothing reached the job: options.smooth_window_s ${job.options && job.options.smooth_window_s} == ${SMOOTH_WINDOW_S}`);
+    check(job.options && job.options.preview_interval_s === PREVIEW_INTERVAL_S,
+      `the form's preview interval reached the job: options.preview_interval_s ${job.options && job.options.preview_interval_s} == ${PREVIEW_INTERVAL_S}`);
     check(job.options && job.options.max_features === MAX_FEATURES && !('refine_focal' in job.options),
       `the form's feature budget reached the job, the unticked boxes did not: options ${JSON.stringify(job.options)}`);
     check(job.options && job.options.global_refinement_keyframes === 400,

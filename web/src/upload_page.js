@@ -71,11 +71,13 @@ async function collectOptions(form) {
   for (const key of ['fixed_k1', 'name_order']) {
     if (form.elements[key].checked) options[key] = true;
   }
-  const smooth = form.elements.smooth_window_s.value.trim();
-  if (smooth) {
-    const s = Number(smooth);
-    if (!(s >= 0 && s <= 5)) throw new Error('path smoothing must be between 0 and 5 seconds');
-    options.smooth_window_s = s;
+  for (const [key, label, max] of [['smooth_window_s', 'path smoothing', 5],
+    ['preview_interval_s', 'the preview interval', 60]]) {
+    const text = form.elements[key].value.trim();
+    if (!text) continue;
+    const s = Number(text);
+    if (!(s >= 0 && s <= max)) throw new Error(`${label} must be between 0 and ${max} seconds`);
+    options[key] = s;
   }
   return options;
 }
