@@ -91,6 +91,14 @@ StreamSource::StreamSource(const std::string& input, const FrameSourceOptions& o
       !HasOption(decoder_options.format_options, "rtsp_transport")) {
     decoder_options.format_options.emplace_back("rtsp_transport", "tcp");
   }
+  // FFmpeg probes a stream for up to 5 s (analyzeduration) before the first frame is read; a
+  // live sender keeps sending meanwhile, and that backlog then arrives at once, more than the
+  // frame buffer holds. An RTMP feed (FLV) took the whole 5 s: 86 of its first 182 frames were
+  // dropped; with 1 s it opened in 1.1 s and none were (docs/benchmarks.md, "Live stream").
+  // Joining an MPEG-TS feed mid-GOP still waits for the next keyframe, as before.
+  if (!HasOption(decoder_options.format_options, "analyzeduration")) {
+    decoder_options.format_options.emplace_back("analyzeduration", "1000000");
+  }
   decoder_options.interrupt = [this] { return ShouldInterrupt(); };
   decoder_options.display_name = input_;
   // FFmpeg's pipe protocol blocks in read(2), where no interrupt reaches it (an idle pipe would
