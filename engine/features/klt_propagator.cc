@@ -1,6 +1,7 @@
 #include "engine/features/klt_propagator.h"
 
 #include <cmath>
+#include <cstring>
 
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
@@ -61,6 +62,7 @@ void KltPropagator::SetReference(const cv::Mat& gray, const Features& features) 
   GLAM_CHECK(!gray.empty() && gray.type() == CV_8UC1, "KLT reference must be 8-bit grey");
   GLAM_CHECK(features.descriptors.rows == static_cast<int>(features.size()) &&
              features.colors.size() == features.size());
+  GLAM_CHECK(features.empty() || features.descriptors.type() == CV_32F, "KLT reference descriptors must be CV_32F");
   reference_pyramid_.clear();
   cv::buildOpticalFlowPyramid(gray, reference_pyramid_, window_, options_.pyramid_levels, true);
   reference_ = features;
@@ -136,12 +138,14 @@ Features KltPropagator::Propagate(const cv::Mat& gray) {
   out.keypoints.reserve(alive_.size());
   out.colors.reserve(alive_.size());
   out.descriptors.create(static_cast<int>(alive_.size()), reference_.descriptors.cols, CV_32F);
+  // Rows copied as bytes: a cv::Mat row header per copy cost more than the copy itself.
+  const std::size_t row_bytes = reference_.descriptors.elemSize() * static_cast<std::size_t>(reference_.descriptors.cols);
   for (std::size_t i = 0; i < alive_.size(); ++i) {
     cv::KeyPoint kp = reference_.keypoints[alive_[i]];
     kp.pt = last_position_[i];
     out.keypoints.push_back(kp);
     out.colors.push_back(reference_.colors[alive_[i]]);
-    reference_.descriptors.row(alive_[i]).copyTo(out.descriptors.row(static_cast<int>(i)));
+    std::memcpy(out.descriptors.ptr(static_cast<int>(i)), reference_.descriptors.ptr(alive_[i]), row_bytes);
   }
   return out;
 }

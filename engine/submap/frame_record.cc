@@ -6,9 +6,16 @@
 namespace glam {
 
 Descriptor QuantizeDescriptor(const float* row) {
+  // min(255, max(0, lround(512 v))) without a libm call per value (lroundf was ~1.6 % of a
+  // run's CPU: every frame's 2000 x 128 values). After clamping to [0, 255], x - trunc(x) is
+  // exact, so rounding half away from zero is the comparison below: bit for bit lround's result.
   Descriptor d;
   for (int i = 0; i < kDescriptorSize; ++i) {
-    d[i] = static_cast<std::uint8_t>(std::clamp(std::lround(512.0f * row[i]), 0L, 255L));
+    float x = 512.0f * row[i];
+    x = x > 0.0f ? x : 0.0f;  // also NaN
+    x = x < 255.0f ? x : 255.0f;
+    const int whole = static_cast<int>(x);
+    d[i] = static_cast<std::uint8_t>(whole + (x - static_cast<float>(whole) >= 0.5f ? 1 : 0));
   }
   return d;
 }
