@@ -267,8 +267,8 @@ class SubmapBuilder {
   // if that fails.
   bool LocaliseGuidedFirst(FrameRecord& record, std::optional<SE3> predicted) const;
   // Constant-velocity prediction (motion_prediction.h) from the newest two posed frames before
-  // the one being tracked (the newest frame of the open submap), to that frame's time.
-  std::optional<SE3> PredictPose() const;
+  // `record` (a frame of the open submap), to its time.
+  std::optional<SE3> PredictPose(const FrameRecord& record) const;
 
   // tracking_rotation.cc (SubmapOptions::hover_max_speed): poses the frame at `position`, which
   // tracking could not pose, by rotation only from the frame before it when the drone was

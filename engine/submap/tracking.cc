@@ -18,12 +18,13 @@
 
 namespace glam {
 
-std::optional<SE3> SubmapBuilder::PredictPose() const {
+std::optional<SE3> SubmapBuilder::PredictPose(const FrameRecord& record) const {
   const FrameRecord* last = nullptr;
   const FrameRecord* before = nullptr;
-  // The newest frame is the one being tracked; look at the posed ones before it.
-  for (auto it = open_.frames.rbegin() + 1; it != open_.frames.rend(); ++it) {
-    if (!it->cam_from_submap) continue;
+  // The posed frames before the one being tracked (usually the newest; the bootstrap tracks
+  // the frames after its second keyframe in order, with later ones not posed yet).
+  for (auto it = open_.frames.rbegin(); it != open_.frames.rend(); ++it) {
+    if (it->index >= record.index || !it->cam_from_submap) continue;
     if (last == nullptr) {
       last = &*it;
     } else {
@@ -34,11 +35,11 @@ std::optional<SE3> SubmapBuilder::PredictPose() const {
   if (last == nullptr) return std::nullopt;
   if (before == nullptr) return last->cam_from_submap;
   return ExtrapolateConstantVelocity(*before->cam_from_submap, before->timestamp_s, *last->cam_from_submap,
-                                     last->timestamp_s, open_.frames.back().timestamp_s);
+                                     last->timestamp_s, record.timestamp_s);
 }
 
 bool SubmapBuilder::Track(FrameRecord& record) {
-  const std::optional<SE3> predicted = PredictPose();
+  const std::optional<SE3> predicted = PredictPose(record);
   if (predicted && Localise(record, predicted)) return true;
   if (predicted) ++stats_.frames_matched_globally;
   return Localise(record, std::nullopt);
