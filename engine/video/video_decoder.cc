@@ -207,8 +207,10 @@ void VideoDecoder::Impl::Open() {
   for (const auto& [key, value] : format_options) av_dict_set(&dictionary, key.c_str(), value.c_str(), 0);
   // On failure avformat_open_input frees the context.
   const int opened = avformat_open_input(&raw_format, path.c_str(), nullptr, &dictionary);
+  // What is left in the dictionary was not consumed, but only an open that got through tells:
+  // a failed one (a stream that never came) leaves every option there.
   const AVDictionaryEntry* unused = nullptr;
-  while ((unused = av_dict_get(dictionary, "", unused, AV_DICT_IGNORE_SUFFIX)) != nullptr) {
+  while (opened >= 0 && (unused = av_dict_get(dictionary, "", unused, AV_DICT_IGNORE_SUFFIX)) != nullptr) {
     GLAM_LOG_WARN("'{}': FFmpeg option {}={} not recognised; ignored", name, unused->key,
                   unused->value);
   }

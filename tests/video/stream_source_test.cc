@@ -1,5 +1,5 @@
 // StreamSource (live streams): every frame of a stream arrives in order with its stream index
-// (pipes, GLAM listening on TCP, GLAM pulling RTMP and SRT from a listening sender);
+// (pipes, GLAM listening on TCP and RTMP, GLAM pulling RTMP and SRT from a listening sender);
 // when the reader is too slow, whole frames are dropped (the oldest buffered ones) and the
 // frames that remain still carry the right index; a silent stream, a sender that never
 // connects and the user's end request each end the input within their time; and nothing but
@@ -425,6 +425,38 @@ TEST_F(PulledStreamTest, ReadsAnSrtListenersStream) {
   // libsrt in live mode discards what it has not sent when the sender closes: ffmpeg's own
   // receiver gets 117-118 of the 120 frames too. A drone's feed does not end that way.
   ReadsEveryFrame("-c copy -f mpegts '" + url + "?mode=listener'", url, 5);
+}
+
+TEST_F(StreamSourceTest, ReadsAnRtmpPushToItsOwnListener) {
+  // GLAM as the RTMP server (a drone app's "custom RTMP" live stream pushes to it): the
+  // demuxer's listen=1; ffmpeg pushes, retrying until the listener is up.
+  const int port = FreePort();
+  const std::string url = "rtmp://127.0.0.1:" + std::to_string(port) + "/live/drone";
+  const std::string command = "for i in $(seq 100); do ffmpeg -nostdin -v error -re -i '" + clip_.string() +
+                              "' -c copy -f flv " + url + " && exit 0; sleep 0.1; done; exit 1";
+  const pid_t sender = fork();
+  ASSERT_GE(sender, 0);
+  if (sender == 0) {
+    execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  FrameSourceOptions options = Options();
+  options.stream_options.emplace_back("listen", "1");
+  options.stream_drop = FrameSourceOptions::StreamDrop::kWait;  // every frame must arrive
+  int expected = 0;
+  {
+    auto source = OpenFrameSource(url, options);
+    while (auto frame = source->Next()) {
+      ASSERT_EQ(frame->index, expected);
+      EXPECT_EQ(DecodeIndex(frame->bgr, kFrames), expected);
+      ++expected;
+    }
+    EXPECT_EQ(source->frames_dropped(), 0);
+  }
+  int status = 0;
+  waitpid(sender, &status, 0);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+  EXPECT_EQ(expected, kFrames);
 }
 
 }  // namespace
