@@ -65,6 +65,39 @@ class StreamSourceTest : public testing::TempDirTest {
     return options;
   }
 
+  // An ffmpeg sender of the clip (`ffmpeg -nostdin -v error <input_args> -i clip <output_args>`)
+  // in a child process. retry: the sender connects to GLAM's listener, so it tries again until
+  // that is up (at most 100 times).
+  pid_t StartSender(const std::string& input_args, const std::string& output_args, bool retry) const {
+    const std::string ffmpeg = "ffmpeg -nostdin -v error " + input_args + " -i '" + clip_.string() + "' " + output_args;
+    const std::string command =
+        retry ? "for i in $(seq 100); do " + ffmpeg + " && exit 0; sleep 0.1; done; exit 1" : "exec " + ffmpeg;
+    const pid_t sender = fork();
+    if (sender == 0) {
+      execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
+      _exit(127);
+    }
+    return sender;
+  }
+
+  static void ExpectSenderSucceeded(pid_t sender) {
+    int status = 0;
+    waitpid(sender, &status, 0);
+    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+  }
+
+  // Reads `source` to its end; every frame must be the next one of the clip, by its index and
+  // by its content. *count: the frames read.
+  static void ReadInOrder(FrameSource& source, int* count) {
+    *count = 0;
+    while (auto frame = source.Next()) {
+      ASSERT_EQ(frame->index, *count);
+      EXPECT_EQ(DecodeIndex(frame->bgr, kFrames), *count);
+      ++*count;
+    }
+    EXPECT_EQ(source.frames_dropped(), 0);
+  }
+
   fs::path clip_;
 };
 
@@ -345,30 +378,15 @@ TEST_F(StreamSourceTest, GivesUpWhenNoSenderConnects) {
 TEST_F(StreamSourceTest, ReadsWhatASenderPushesOverTcp) {
   // GLAM listens; ffmpeg connects (retrying until the listener is up) and sends the clip.
   const int port = FreePort();
-  const std::string command =
-      "for i in $(seq 100); do ffmpeg -nostdin -v error -i '" + clip_.string() +
-      "' -c copy -f mpegts tcp://127.0.0.1:" + std::to_string(port) +
-      " && exit 0; sleep 0.1; done; exit 1";
-  const pid_t sender = fork();
+  const pid_t sender = StartSender("", "-c copy -f mpegts tcp://127.0.0.1:" + std::to_string(port), true);
   ASSERT_GE(sender, 0);
-  if (sender == 0) {
-    execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
-    _exit(127);
-  }
-  int expected = 0;
+  int read = 0;
   {
     auto source = OpenFrameSource("tcp://127.0.0.1:" + std::to_string(port) + "?listen=1", Options());
-    while (auto frame = source->Next()) {
-      ASSERT_EQ(frame->index, expected);
-      EXPECT_EQ(DecodeIndex(frame->bgr, kFrames), expected);
-      ++expected;
-    }
-    EXPECT_EQ(source->frames_dropped(), 0);
+    ReadInOrder(*source, &read);
   }
-  int status = 0;
-  waitpid(sender, &status, 0);
-  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
-  EXPECT_EQ(expected, kFrames);
+  ExpectSenderSucceeded(sender);
+  EXPECT_EQ(read, kFrames);
 }
 
 // A stream GLAM pulls from a server (the usual RTMP and SRT setup: a media server or the
@@ -379,13 +397,8 @@ class PulledStreamTest : public StreamSourceTest {
  protected:
   // `sender_args`: ffmpeg output options and URL (listening). `url`: what GLAM opens.
   void ReadsEveryFrame(const std::string& sender_args, const std::string& url, int lost_at_end = 0) {
-    const std::string command = "exec ffmpeg -nostdin -v error -re -i '" + clip_.string() + "' " + sender_args;
-    const pid_t sender = fork();
+    const pid_t sender = StartSender("-re", sender_args, false);
     ASSERT_GE(sender, 0);
-    if (sender == 0) {
-      execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
-      _exit(127);
-    }
     std::unique_ptr<FrameSource> source;
     FrameSourceOptions options = Options();
     options.stream_drop = FrameSourceOptions::StreamDrop::kWait;  // every frame must arrive
@@ -399,19 +412,12 @@ class PulledStreamTest : public StreamSourceTest {
     ASSERT_NE(source, nullptr) << "could not open " << url;
     EXPECT_NEAR(source->info().fps, kFps, 1e-6);
     EXPECT_EQ(source->info().processing_size, cv::Size(320, 240));
-    int expected = 0;
-    while (auto frame = source->Next()) {
-      ASSERT_EQ(frame->index, expected);
-      EXPECT_EQ(DecodeIndex(frame->bgr, kFrames), expected);
-      ++expected;
-    }
-    EXPECT_LE(expected, kFrames);
-    EXPECT_GE(expected, kFrames - lost_at_end);
-    EXPECT_EQ(source->frames_dropped(), 0);
+    int read = 0;
+    ReadInOrder(*source, &read);
+    EXPECT_LE(read, kFrames);
+    EXPECT_GE(read, kFrames - lost_at_end);
     source.reset();
-    int status = 0;
-    waitpid(sender, &status, 0);
-    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+    ExpectSenderSucceeded(sender);
   }
 };
 
@@ -432,31 +438,18 @@ TEST_F(StreamSourceTest, ReadsAnRtmpPushToItsOwnListener) {
   // demuxer's listen=1; ffmpeg pushes, retrying until the listener is up.
   const int port = FreePort();
   const std::string url = "rtmp://127.0.0.1:" + std::to_string(port) + "/live/drone";
-  const std::string command = "for i in $(seq 100); do ffmpeg -nostdin -v error -re -i '" + clip_.string() +
-                              "' -c copy -f flv " + url + " && exit 0; sleep 0.1; done; exit 1";
-  const pid_t sender = fork();
+  const pid_t sender = StartSender("-re", "-c copy -f flv " + url, true);
   ASSERT_GE(sender, 0);
-  if (sender == 0) {
-    execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
-    _exit(127);
-  }
   FrameSourceOptions options = Options();
   options.stream_options.emplace_back("listen", "1");
   options.stream_drop = FrameSourceOptions::StreamDrop::kWait;  // every frame must arrive
-  int expected = 0;
+  int read = 0;
   {
     auto source = OpenFrameSource(url, options);
-    while (auto frame = source->Next()) {
-      ASSERT_EQ(frame->index, expected);
-      EXPECT_EQ(DecodeIndex(frame->bgr, kFrames), expected);
-      ++expected;
-    }
-    EXPECT_EQ(source->frames_dropped(), 0);
+    ReadInOrder(*source, &read);
   }
-  int status = 0;
-  waitpid(sender, &status, 0);
-  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
-  EXPECT_EQ(expected, kFrames);
+  ExpectSenderSucceeded(sender);
+  EXPECT_EQ(read, kFrames);
 }
 
 }  // namespace
