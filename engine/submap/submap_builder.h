@@ -264,8 +264,9 @@ class SubmapBuilder {
   // from the tracked pose), which Localise clears first.
   bool Localise(FrameRecord& record, std::optional<SE3> predicted) const;
   // Guided from `predicted` (when given), then against all landmarks (25-70 ms per frame) only
-  // if that fails.
-  bool LocaliseGuidedFirst(FrameRecord& record, std::optional<SE3> predicted) const;
+  // if that fails; *matched_globally (when given) is set when a guided attempt fell back.
+  bool LocaliseGuidedFirst(FrameRecord& record, std::optional<SE3> predicted,
+                           bool* matched_globally = nullptr) const;
   // Constant-velocity prediction (motion_prediction.h) from the newest two posed frames before
   // `record` (a frame of the open submap), to its time.
   std::optional<SE3> PredictPose(const FrameRecord& record) const;

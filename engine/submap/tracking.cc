@@ -39,14 +39,16 @@ std::optional<SE3> SubmapBuilder::PredictPose(const FrameRecord& record) const {
 }
 
 bool SubmapBuilder::Track(FrameRecord& record) {
-  const std::optional<SE3> predicted = PredictPose(record);
-  if (predicted && Localise(record, predicted)) return true;
-  if (predicted) ++stats_.frames_matched_globally;
-  return Localise(record, std::nullopt);
+  bool matched_globally = false;
+  const bool posed = LocaliseGuidedFirst(record, PredictPose(record), &matched_globally);
+  if (matched_globally) ++stats_.frames_matched_globally;
+  return posed;
 }
 
-bool SubmapBuilder::LocaliseGuidedFirst(FrameRecord& record, std::optional<SE3> predicted) const {
+bool SubmapBuilder::LocaliseGuidedFirst(FrameRecord& record, std::optional<SE3> predicted,
+                                        bool* matched_globally) const {
   if (predicted && Localise(record, predicted)) return true;
+  if (predicted && matched_globally != nullptr) *matched_globally = true;
   return Localise(record, std::nullopt);
 }
 
