@@ -2,11 +2,13 @@
 # Robustness over flights and cameras the tests do not use (docs/benchmarks.md, "Robustness
 # over flights and cameras").
 #
-# Renders eighteen synthetic 600-frame clips at 640x360 with `glam synth` (skipped when already
-# rendered; seeds 41-52, 54-59, used by no test), each changing one thing from the lawnmower at
-# 100 m: speed, altitude, lens, distortion, trajectory, terrain, compression, pitch, frame
-# rate, a take-off climb; and derives five more from the lawnmower clip with ffmpeg filters (an on-screen
-# display, exposure flicker, defocus, motion blur, a 3 s freeze of the stream). Maps each one as a user without a calibration would (`glam map`, no intrinsics: the
+# Renders twenty synthetic 600-frame clips at 640x360 with `glam synth` (skipped when already
+# rendered; seeds 41-52, 54-59, 66, 67, used by no test), each changing one thing from the
+# lawnmower at 100 m: speed, altitude, lens, distortion, trajectory, terrain, compression,
+# pitch, frame rate, a take-off climb, the horizon in view (75 and 80 deg from nadir, turning);
+# and derives five more from the lawnmower clip with ffmpeg filters (an on-screen display,
+# exposure flicker, defocus, motion blur, a 3 s freeze of the stream). Maps each one as a user
+# without a calibration would (`glam map`, no intrinsics: the
 # focal is estimated from the 0.8 x long-side guess) and, with CALIBRATED=1, also with the
 # clip's true intrinsics. Prints one row per run: estimated focal against the truth, whether
 # it was held (docs/algorithm.md, focal length), submaps, posed frames, ATE after Sim3 and the
@@ -42,8 +44,10 @@ declare -A CLIP=(
   [high]="--trajectory lawnmower --altitude 200 --speed 15 --seed 51"
   [fps24]="--trajectory loop --fps 24 --wobble-deg 4 --seed 52"
   [climb]="--trajectory lawnmower --climb-from 30 --seed 59"
+  [horizon]="--trajectory lawnmower --pitch-deg 75 --altitude 60 --seed 66"
+  [horizon_loop]="--trajectory loop --pitch-deg 80 --altitude 40 --seed 67"
 )
-ORDER="lawnmower fast low wide_lens narrow_lens distorted barrel_mild pincushion orbit_barrel high_barrel wide_barrel orbit flat crf32 pitch60 high fps24 climb"
+ORDER="lawnmower fast low wide_lens narrow_lens distorted barrel_mild pincushion orbit_barrel high_barrel wide_barrel orbit flat crf32 pitch60 high fps24 climb horizon horizon_loop"
 # Derived from the lawnmower clip by an ffmpeg filter (Debian's ffmpeg, re-encoded at CRF 16);
 # the ground truth is copied, and where the filter changes what a frame shows, adjusted.
 declare -A DERIVED=(
