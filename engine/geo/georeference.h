@@ -39,7 +39,7 @@ struct GeoreferenceOptions {
   double outlier_factor = 3.0;
   double min_outlier_m = 2.0;
   // The full fit needs the second horizontal spread (singular value of the centred GPS
-  // positions) to be at least this fraction of the first.
+  // positions) to be at least this fraction of the first, and to span min_extent_m too.
   double min_spread_ratio = 0.2;
 
   void Check() const;  // throws InputError

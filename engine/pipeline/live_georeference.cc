@@ -51,6 +51,16 @@ std::map<std::int64_t, Eigen::Vector3d> LiveGeoreferencer::Centres(const std::ve
   return CameraCentres(poses);
 }
 
+std::optional<GeoreferenceResult> LiveGeoreferencer::FitOpenSubmap(const Submap& open,
+                                                                  const Sim3& world_from_submap) const {
+  if (gps_.empty()) return std::nullopt;
+  ChosenPoses poses;
+  AddFramePoses(open, world_from_submap, &poses);
+  GeoreferenceResult result = FitGeoreference(CameraCentres(poses), fps_, gps_, options_);
+  if (!result.ok) return std::nullopt;
+  return result;
+}
+
 std::shared_ptr<const MapSnapshot> LiveGeoreferencer::Apply(const std::shared_ptr<const MapSnapshot>& snapshot) {
   if (gps_.empty() || snapshot == nullptr) return snapshot;
   GeoreferenceResult refit = FitGeoreference(Centres(MapSubmaps(*snapshot)), fps_, gps_, options_);

@@ -57,6 +57,12 @@ class LiveGeoreferencer {
   // The fit the last georeferenced revision used (nullopt: none yet).
   const std::optional<GeoreferenceResult>& fit() const { return fit_; }
 
+  // The same fit on a submap that is still being built, placed by world_from_submap in the
+  // world the first revision will have (the live preview of the run's first submap, before any
+  // revision exists: open_submap_preview.h); nullopt when its posed frames do not allow one yet.
+  // Not kept: the revisions' fits are computed on completed submaps.
+  std::optional<GeoreferenceResult> FitOpenSubmap(const Submap& open, const Sim3& world_from_submap) const;
+
  private:
   // The cached poses-only copy of submap `id`, read from disk on first use if needed.
   const Submap& Poses(std::uint32_t id);

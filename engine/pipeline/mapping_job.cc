@@ -274,7 +274,10 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   }
   // Revisions go out in metres, east-north-up as soon as the GPS fit succeeds (live_georeference.h).
   std::optional<LiveGeoreferencer> live_geo;
-  if (gps) live_geo.emplace(*gps, report.fps, options.georeference, submaps_root);
+  if (gps) {
+    live_geo.emplace(*gps, report.fps, options.georeference, submaps_root);
+    previewer.GeoreferenceWith(&*live_geo);
+  }
   auto publishable = [&live_geo](std::shared_ptr<const MapSnapshot> snapshot) {
     return live_geo ? live_geo->Apply(snapshot) : snapshot;
   };

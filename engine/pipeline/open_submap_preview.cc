@@ -3,6 +3,7 @@
 #include "engine/alignment/shared_frames.h"
 #include "engine/core/logging.h"
 #include "engine/core/options.h"
+#include "engine/geo/geodetic.h"
 
 namespace glam {
 
@@ -48,6 +49,7 @@ bool OpenSubmapPreviewer::Update(const SubmapBuilder& builder) {
   keyframes_seen_ = keyframes;
   last_time_ = now;
   Sim3 anchor_from_open;
+  std::optional<Eigen::Matrix4d> ecef_from_world;
   if (anchor) {
     const std::optional<Sim3> previous_from_open = EstimateFromSharedFrames(*previous_, *preview);
     if (!previous_from_open) {
@@ -57,8 +59,22 @@ bool OpenSubmapPreviewer::Update(const SubmapBuilder& builder) {
     anchor_from_open = *previous_from_open;
   } else {
     anchor_from_open = LevelSubmap(*preview, leveling_).world_from_submap;
+    if (georeferencer_ != nullptr && !georeferencer_->fit()) {
+      const std::optional<GeoreferenceResult> fit = georeferencer_->FitOpenSubmap(*preview, anchor_from_open);
+      if (!fit) {
+        GLAM_LOG_DEBUG("open submap {}: not previewed until the GPS track fits its {} posed frames", id,
+                       preview->frame_poses.size());
+        return false;
+      }
+      GLAM_LOG_DEBUG("open submap {}: previewed in ENU, GPS fit of {} frames, rms {:.2f} m over {:.1f} m ({}), "
+                     "scale {:.3f}",
+                     id, fit->samples_used, fit->rms_m, fit->extent_m, fit->full ? "similarity" : "yaw, scale, offset",
+                     fit->enu_from_world.scale());
+      anchor_from_open = fit->enu_from_world * anchor_from_open;
+      ecef_from_world = EnuFrame(fit->origin).EcefFromEnu();
+    }
   }
-  if (!tiles_.OnOpenSubmapPreview(*preview, anchor, anchor_from_open)) return false;
+  if (!tiles_.OnOpenSubmapPreview(*preview, anchor, anchor_from_open, ecef_from_world)) return false;
   ++previews_;
   last_submap_ = preview->id;
   last_keyframes_ = static_cast<std::int64_t>(preview->keyframes.size());

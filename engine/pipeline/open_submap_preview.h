@@ -9,7 +9,11 @@
 // last 10 % of frames and poses them again (the hand-off), so those shared frames give
 // previous_from_open (EstimateFromSharedFrames), and the preview rides on the previous
 // submap's placement in each revision. The first submap of a run has no previous one: it is
-// levelled on its own, as the aligner will level it into the world frame. A submap started
+// levelled on its own, as the aligner will level it into the world frame; with a GPS track
+// (GeoreferenceWith) it is shown only once the track fits its posed frames, and in metres,
+// east-north-up with the fit, as the revisions after it will be: shown in the mapping frame
+// first, the map would jump to another scale and heading at the first georeferenced revision.
+// A submap started
 // after a tracking loss shares no frames with the one before: it gets no preview until it
 // completes and alignment has linked it (a preview in the wrong place is worse than none).
 #pragma once
@@ -21,6 +25,7 @@
 
 #include "engine/alignment/world_leveling.h"
 #include "engine/map/submap.h"
+#include "engine/pipeline/live_georeference.h"
 #include "engine/pipeline/tile_writer.h"
 #include "engine/submap/submap_builder.h"
 
@@ -42,6 +47,10 @@ class OpenSubmapPreviewer {
  public:
   OpenSubmapPreviewer(const OpenSubmapPreviewOptions& options, const LevelingOptions& leveling, TileWriter& tiles);
 
+  // The run's GPS fits (owned by the caller, used on the same thread as Update): the first
+  // submap's preview waits for a fit of its own while no revision has been georeferenced.
+  void GeoreferenceWith(const LiveGeoreferencer* georeferencer) { georeferencer_ = georeferencer; }
+
   // The submap the next open one hands off from (also the last one of a resumed run).
   void OnSubmapCompleted(std::shared_ptr<const Submap> submap);
 
@@ -59,6 +68,7 @@ class OpenSubmapPreviewer {
   OpenSubmapPreviewOptions options_;
   LevelingOptions leveling_;
   TileWriter& tiles_;
+  const LiveGeoreferencer* georeferencer_ = nullptr;
   std::shared_ptr<const Submap> previous_;
   Clock::time_point last_time_{};
   std::int64_t keyframes_seen_ = -1;  // builder's keyframe count at the last attempt

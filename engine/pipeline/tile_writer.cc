@@ -105,9 +105,19 @@ void TileWriter::OnRevision(const MapSnapshot& snapshot) {
 
 void TileWriter::WriteTilesets(const MapSnapshot& snapshot) {
   const std::optional<OpenTile> open = PlacedPreview(snapshot);
+  // A first submap's preview placed by a GPS fit before any revision is georeferenced: the
+  // tileset is in that ENU frame already.
+  const bool georeferenced_preview =
+      open && preview_ && preview_->ecef_from_world && !snapshot.ecef_from_world;
+  MapSnapshot with_frame;
+  if (georeferenced_preview) {
+    with_frame = snapshot;
+    with_frame.ecef_from_world = preview_->ecef_from_world;
+  }
+  const MapSnapshot& written = georeferenced_preview ? with_frame : snapshot;
   for (const TileVariant variant : {TileVariant::kDraco, TileVariant::kQuantized}) {
     WriteFileAtomically(out_dir_ / TilesetFileName(variant),
-                        BuildTileset(snapshot, bounds_, variant, run_id_, open ? &*open : nullptr).dump(1));
+                        BuildTileset(written, bounds_, variant, run_id_, open ? &*open : nullptr).dump(1));
   }
 }
 
@@ -130,7 +140,8 @@ std::optional<OpenTile> TileWriter::PlacedPreview(const MapSnapshot& snapshot) {
 }
 
 bool TileWriter::OnOpenSubmapPreview(const Submap& preview, std::optional<std::uint32_t> anchor,
-                                     const Sim3& anchor_from_submap) {
+                                     const Sim3& anchor_from_submap,
+                                     const std::optional<Eigen::Matrix4d>& ecef_from_world) {
   std::lock_guard lock(mutex_);
   if (anchor && !PlacedLocked(*anchor)) return false;
   if (FindPlacement(last_snapshot_, preview.id) != nullptr) return false;  // completed and placed already
@@ -148,6 +159,7 @@ bool TileWriter::OnOpenSubmapPreview(const Submap& preview, std::optional<std::u
   next.tile.version = ++preview_version_;
   next.anchor = anchor;
   next.anchor_from_submap = anchor_from_submap;
+  if (!anchor) next.ecef_from_world = ecef_from_world;
   preview_ = std::move(next);
   WriteTilesets(last_snapshot_);
   return true;

@@ -73,11 +73,14 @@ class TileWriter {
   // with it (the revision number stays: previews are not map revisions). Placement:
   // world_from_anchor (the anchor submap's placement in each revision written from now on) *
   // anchor_from_submap; without an anchor, anchor_from_submap is world_from_submap itself (the
-  // first submap, levelled on its own). A revision that places the submap itself, or that
-  // does not place the anchor (or marks it disconnected), lists no preview. Returns false, and
-  // writes nothing, when the last written revision does not place the anchor.
+  // first submap, levelled on its own, or in metres east-north-up by a GPS fit, which then
+  // comes with the ENU frame's ecef_from_world for the tileset root while no revision has one).
+  // A revision that places the submap itself, or that does not place the anchor (or marks it
+  // disconnected), lists no preview. Returns false, and writes nothing, when the last written
+  // revision does not place the anchor.
   bool OnOpenSubmapPreview(const Submap& preview, std::optional<std::uint32_t> anchor,
-                           const Sim3& anchor_from_submap);
+                           const Sim3& anchor_from_submap,
+                           const std::optional<Eigen::Matrix4d>& ecef_from_world = std::nullopt);
   // Forgets the preview (its submap was discarded, or the run ends) and deletes its tiles;
   // rewrites the tilesets if they listed it.
   void ClearOpenPreview();
@@ -101,6 +104,7 @@ class TileWriter {
     OpenTile tile;  // world_from_submap filled in per revision
     std::optional<std::uint32_t> anchor;
     Sim3 anchor_from_submap;
+    std::optional<Eigen::Matrix4d> ecef_from_world;  // without an anchor: placed by a GPS fit
   };
 
   std::filesystem::path out_dir_;
