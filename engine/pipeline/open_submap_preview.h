@@ -13,9 +13,9 @@
 // (GeoreferenceWith) it is shown only once the track fits its posed frames, and in metres,
 // east-north-up with the fit, as the revisions after it will be: shown in the mapping frame
 // first, the map would jump to another scale and heading at the first georeferenced revision.
-// A submap started
-// after a tracking loss shares no frames with the one before: it gets no preview until it
-// completes and alignment has linked it (a preview in the wrong place is worse than none).
+// A submap started after a tracking loss shares no frames with the one before: it gets no
+// preview until it completes and alignment has linked it (a preview in the wrong place is
+// worse than none).
 #pragma once
 
 #include <chrono>
