@@ -197,12 +197,8 @@ TEST(GlobalAlignment, LoopFlightFindsTheLoopEdgeWithoutFalseEdgesAndIsAccurate) 
       if (node.at("id").get<std::uint32_t>() != id) continue;
       EXPECT_LT((world_from_submap - Sim3FromRows(node.at("world_from_submap")).matrix()).norm(), 1e-6);
     }
-    const std::string uri = child.at("content").at("uri").get<std::string>();  // tiles/<id>.glb?v=<run>
-    const tinygltf::Model model = testing::ParseGlb(testing::ReadBytes(out / uri.substr(0, uri.find('?'))));
-    for (ColoredPoint p : testing::DecodeDracoPoints(model)) {
-      p.position = (world_from_submap * p.position.cast<double>().homogeneous()).head<3>().cast<float>();
-      tile_points.push_back(p);
-    }
+    const std::vector<ColoredPoint> points = testing::ChildTileWorldPoints(out, child);
+    tile_points.insert(tile_points.end(), points.begin(), points.end());
   }
   ASSERT_EQ(static_cast<std::int64_t>(tile_points.size()), report.points);
   const eval::HeightfieldSurface surface = eval::HeightfieldSurface::Load(kClip / "gt_surface.json");

@@ -190,4 +190,14 @@ Eigen::Matrix4d FromColumnMajor(const nlohmann::json& a) {
   return m;
 }
 
+std::vector<ColoredPoint> ChildTileWorldPoints(const std::filesystem::path& out_dir, const nlohmann::json& child) {
+  const std::string uri = child.at("content").at("uri").get<std::string>();  // tiles/<id>.glb?v=<run>
+  const Eigen::Matrix4d world_from_submap = FromColumnMajor(child.at("transform"));
+  std::vector<ColoredPoint> points = DecodeDracoPoints(ParseGlb(ReadBytes(out_dir / uri.substr(0, uri.find('?')))));
+  for (ColoredPoint& p : points) {
+    p.position = (world_from_submap * p.position.cast<double>().homogeneous()).head<3>().cast<float>();
+  }
+  return points;
+}
+
 }  // namespace glam::testing

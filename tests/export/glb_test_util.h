@@ -46,4 +46,8 @@ std::string ReadBytes(const std::filesystem::path& path);
 // A tileset `transform` (16 numbers, column-major) as a matrix; fails the test on another size.
 Eigen::Matrix4d FromColumnMajor(const nlohmann::json& a);
 
+// The points of a tileset child's Draco tile (its content uri under `out_dir`, the `?v=`
+// query dropped), placed in the tileset's world frame by the child's `transform`.
+std::vector<ColoredPoint> ChildTileWorldPoints(const std::filesystem::path& out_dir, const nlohmann::json& child);
+
 }  // namespace glam::testing

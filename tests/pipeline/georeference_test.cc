@@ -213,13 +213,9 @@ TEST(GeoreferenceEndToEnd, TheFirstSubmapIsPreviewedInMetresEastNorthUp) {
     ++in_enu;
     for (const nlohmann::json& child : tileset["root"]["children"]) {
       if (!child["extras"].value("open", false)) continue;
-      const std::string uri = child["content"]["uri"].get<std::string>();
-      const Eigen::Matrix4d world_from_submap = glam::testing::FromColumnMajor(child["transform"]);
       std::vector<double> errors;
-      for (const ColoredPoint& point : glam::testing::DecodeDracoPoints(
-               glam::testing::ParseGlb(glam::testing::ReadBytes(out / uri.substr(0, uri.find('?')))))) {
-        const Eigen::Vector3d enu = (world_from_submap * point.position.cast<double>().homogeneous()).head<3>();
-        errors.push_back(surface.Distance(enu + shift).distance);
+      for (const ColoredPoint& point : glam::testing::ChildTileWorldPoints(out, child)) {
+        errors.push_back(surface.Distance(point.position.cast<double>() + shift).distance);
       }
       std::nth_element(errors.begin(), errors.begin() + static_cast<std::ptrdiff_t>(errors.size() / 2), errors.end());
       median_errors.push_back(errors.empty() ? 1e9 : errors[errors.size() / 2]);

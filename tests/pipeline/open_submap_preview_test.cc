@@ -58,12 +58,7 @@ SeenPreview ReadPreview(const fs::path& out, const MappingProgress& progress) {
   seen.keyframes = child->at("extras").at("keyframes");
   seen.submaps_completed = progress.submaps_completed;
   seen.uri = child->at("content").at("uri");
-  const std::string file = seen.uri.substr(0, seen.uri.find('?'));
-  const Eigen::Matrix4d world_from_submap = testing::FromColumnMajor(child->at("transform"));
-  for (ColoredPoint p : testing::DecodeDracoPoints(testing::ParseGlb(testing::ReadBytes(out / file)))) {
-    p.position = (world_from_submap * p.position.cast<double>().homogeneous()).head<3>().cast<float>();
-    seen.world_points.push_back(p);
-  }
+  seen.world_points = testing::ChildTileWorldPoints(out, *child);
   return seen;
 }
 
