@@ -32,6 +32,7 @@ struct ServeArgs {
   int concurrent_jobs = 1;
   int max_queued_jobs = 100;
   std::int64_t max_upload_mb = 8192;
+  double upload_expiry_hours = 24;
   bool allow_streams = false;
   server::HttpServerOptions http;
 };
@@ -74,6 +75,10 @@ void RunServe(ServeArgs& args) {
     throw InputError(fmt::format("--max-upload-mb must be in 1..{}, got {}", 1LL << 24, args.max_upload_mb));
   }
   args.http.max_upload_bytes = args.max_upload_mb << 20;
+  if (!(args.upload_expiry_hours >= 1.0 / 60 && args.upload_expiry_hours <= 24 * 365)) {
+    throw InputError(fmt::format("--upload-expiry-hours must be in 1/60..8760, got {}", args.upload_expiry_hours));
+  }
+  args.http.upload_expiry = std::chrono::seconds(static_cast<std::int64_t>(args.upload_expiry_hours * 3600));
   args.http.web_root = args.web_root.empty() ? DefaultWebRoot() : args.web_root;
   args.http.Check();
 
@@ -133,6 +138,12 @@ void RegisterServeCommand(CLI::App& app) {
   cmd->add_option("--max-upload-mb", args->max_upload_mb, "Largest accepted upload (MiB)")->capture_default_str();
   cmd->add_option("--max-concurrent-uploads", args->http.max_concurrent_uploads,
                   "Uploads received at the same time (503 beyond)")
+      ->capture_default_str();
+  cmd->add_option("--max-open-uploads", args->http.max_open_uploads,
+                  "Resumable uploads (POST /api/v1/uploads) open at the same time (503 beyond)")
+      ->capture_default_str();
+  cmd->add_option("--upload-expiry-hours", args->upload_expiry_hours,
+                  "A resumable upload is deleted this long after its last byte arrived")
       ->capture_default_str();
   cmd->add_option("--concurrent-jobs", args->concurrent_jobs, "Mapping jobs run at the same time")
       ->capture_default_str();

@@ -10,6 +10,7 @@
 // Engine headers (Eigen) must come before httplib.h: it pulls in <resolv.h>, whose macros
 // break Eigen's product kernels when Eigen is parsed afterwards.
 #include "api/job_service.h"
+#include "api/upload_store.h"
 #include "server/http_metrics.h"
 #include "server/http_server.h"
 
@@ -19,9 +20,20 @@
 namespace glam::server {
 
 struct HttpServer::Context {
-  Context(api::JobService& s, HttpServerOptions o) : service(s), options(std::move(o)) {}
+  Context(api::JobService& s, HttpServerOptions o)
+      : service(s), options(std::move(o)), uploads(ResumableUploadOptions(s, options)) {}
+  // DIR/resumable beside the job store, with the server's upload limits.
+  static api::UploadStoreOptions ResumableUploadOptions(const api::JobService& s, const HttpServerOptions& o) {
+    api::UploadStoreOptions u;
+    u.dir = s.data_dir() / "resumable";
+    u.max_bytes = o.max_upload_bytes;
+    u.max_sessions = o.max_open_uploads;
+    u.expiry = o.upload_expiry;
+    return u;
+  }
   api::JobService& service;
   HttpServerOptions options;
+  api::UploadStore uploads;
   HttpMetrics metrics;
   std::atomic<int> sse_clients{0};
   std::atomic<int> uploads_in_progress{0};
@@ -43,6 +55,32 @@ void DrainRejectedBody(const httplib::Request& req, httplib::Response& res,
 // POST /api/v1/jobs (multipart/form-data or a raw video body).
 void HandleCreateJob(Context& ctx, const httplib::Request& req, httplib::Response& res,
                      const httplib::ContentReader& reader);
+// Reads a small JSON request body (at most max_bytes: 413 beyond) and parses it (400 unless it
+// is a JSON object).
+nlohmann::json ReadJsonObjectBody(httplib::Response& res, const httplib::ContentReader& reader,
+                                  std::size_t max_bytes, const char* what);
+// POST /api/v1/jobs with an application/json body: {"upload_id"} (a completed resumable
+// upload) or {"stream_url"} (a live stream).
+void HandleCreateJobFromJson(Context& ctx, httplib::Response& res, const httplib::ContentReader& reader);
+// POST /api/v1/uploads, GET | DELETE /api/v1/uploads/{id}, PATCH /api/v1/uploads/{id}.
+void HandleCreateUpload(Context& ctx, const httplib::Request& req, httplib::Response& res,
+                        const httplib::ContentReader& reader);
+void HandleGetUpload(Context& ctx, const httplib::Request& req, httplib::Response& res);
+void HandleDeleteUpload(Context& ctx, const httplib::Request& req, httplib::Response& res);
+void HandleAppendUpload(Context& ctx, const httplib::Request& req, httplib::Response& res,
+                        const httplib::ContentReader& reader);
+// Counts a request that receives upload bytes against max_concurrent_uploads (503 beyond).
+class UploadSlot {
+ public:
+  explicit UploadSlot(Context& ctx);
+  ~UploadSlot();
+  UploadSlot(const UploadSlot&) = delete;
+  UploadSlot& operator=(const UploadSlot&) = delete;
+
+ private:
+  Context& ctx_;
+};
+
 // GET /api/v1/jobs/{id}/events (Server-Sent Events).
 void HandleEvents(Context& ctx, const httplib::Request& req, httplib::Response& res);
 // GET /api/v1/jobs/{id}/<file>: ETag / If-None-Match and Range support.

@@ -36,7 +36,7 @@ struct RouteDef {
   std::string path;  // OpenAPI template
   bool needs_auth;
   PlainHandler handler;
-  ReaderHandler reader_handler;  // POST with a streamed body
+  ReaderHandler reader_handler;  // POST or PATCH with a streamed body
 };
 
 int IntParam(const Request& req, const char* name, int fallback, int max) {
@@ -80,6 +80,9 @@ void HandleMetrics(Context& ctx, const Request&, Response& res) {
   out += "# HELP glam_uploads_in_progress Uploads being received.\n";
   out += "# TYPE glam_uploads_in_progress gauge\n";
   out += fmt::format("glam_uploads_in_progress {}\n", ctx.uploads_in_progress.load());
+  out += "# HELP glam_resumable_uploads_open Resumable uploads open (bytes still expected or not yet made a job).\n";
+  out += "# TYPE glam_resumable_uploads_open gauge\n";
+  out += fmt::format("glam_resumable_uploads_open {}\n", ctx.uploads.open_sessions());
   ctx.metrics.Render(&out);
   res.status = 200;
   res.set_content(out, "text/plain; version=0.0.4");
@@ -117,6 +120,10 @@ const std::vector<RouteDef>& RouteTable() {
       res.status = 204;
     });
     plain("GET", "/api/v1/jobs/{id}/events", true, HandleEvents);
+    t.push_back(RouteDef{"POST", "/api/v1/uploads", true, nullptr, HandleCreateUpload});
+    plain("GET", "/api/v1/uploads/{id}", true, HandleGetUpload);
+    t.push_back(RouteDef{"PATCH", "/api/v1/uploads/{id}", true, nullptr, HandleAppendUpload});
+    plain("DELETE", "/api/v1/uploads/{id}", true, HandleDeleteUpload);
     plain("POST", "/api/v1/jobs/{id}/cancel", true, [](Context& ctx, const Request& req, Response& res) {
       SendJson(res, 200, api::JobToJson(ctx.service.Cancel(JobIdParam(req))));
     });
@@ -214,6 +221,8 @@ void HttpServerOptions::Check() const {
                                  http_threads - 1, max_sse_clients));
   }
   if (max_concurrent_uploads < 1) throw InputError("--max-concurrent-uploads must be at least 1");
+  if (max_open_uploads < 1) throw InputError("--max-open-uploads must be at least 1");
+  if (upload_expiry < std::chrono::minutes(1)) throw InputError("--upload-expiry-hours must be at least 1 minute");
   if (token.find_first_of(" \t\r\n") != std::string::npos) throw InputError("the API token must not contain spaces");
 }
 
@@ -247,12 +256,13 @@ HttpServer::HttpServer(api::JobService& service, HttpServerOptions options)
   if (!ctx->options.cors_origin.empty()) {
     server_->set_default_headers({{"Access-Control-Allow-Origin", ctx->options.cors_origin},
                                   {"Vary", "Origin"},
-                                  {"Access-Control-Expose-Headers", "Location, ETag, Content-Range"}});
+                                  {"Access-Control-Expose-Headers", "Location, ETag, Content-Range, Upload-Offset"}});
     server_->Options(".*", [](const Request&, Response& res) {
       res.status = 204;
-      res.set_header("Access-Control-Allow-Methods", "GET, POST, DELETE, OPTIONS");
+      res.set_header("Access-Control-Allow-Methods", "GET, POST, PATCH, DELETE, OPTIONS");
       res.set_header("Access-Control-Allow-Headers",
-                     "Authorization, Content-Type, Last-Event-ID, X-Glam-Options, Range, If-None-Match");
+                     "Authorization, Content-Type, Last-Event-ID, X-Glam-Options, Range, If-None-Match, "
+                     "Upload-Offset");
       res.set_header("Access-Control-Max-Age", "600");
     });
   }
@@ -291,9 +301,14 @@ HttpServer::HttpServer(api::JobService& service, HttpServerOptions options)
     };
     const std::string pattern = PathRegex(def.path);
     if (def.reader_handler) {
-      server_->Post(pattern, [run](const Request& req, Response& res, const httplib::ContentReader& reader) {
+      auto with_reader = [run](const Request& req, Response& res, const httplib::ContentReader& reader) {
         run(req, res, &reader);
-      });
+      };
+      if (def.method == "PATCH") {
+        server_->Patch(pattern, with_reader);
+      } else {
+        server_->Post(pattern, with_reader);
+      }
     } else if (def.method == "GET") {
       server_->Get(pattern, [run](const Request& req, Response& res) { run(req, res, nullptr); });
     } else if (def.method == "POST") {

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <filesystem>
 #include <memory>
@@ -34,6 +35,10 @@ struct HttpServerOptions {
   std::string token;
   std::int64_t max_upload_bytes = 8LL << 30;
   int max_concurrent_uploads = 16;
+  // Resumable uploads (POST /api/v1/uploads, api/upload_store.h): sessions open at once, and
+  // how long one is kept after its last byte arrived.
+  int max_open_uploads = 64;
+  std::chrono::seconds upload_expiry = std::chrono::hours(24);
   int http_threads = 64;
   int max_sse_clients = 32;
   std::string cors_origin;          // empty: no CORS headers

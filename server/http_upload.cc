@@ -14,6 +14,8 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <memory>
 #include <optional>
 #include <set>
@@ -39,25 +41,6 @@ constexpr std::size_t kMaxOptionsBytes = 64 * 1024;
 constexpr std::size_t kMaxTelemetryBytes = 64u << 20;
 // Photos per job: large surveys have a few thousand.
 constexpr std::size_t kMaxImages = 20000;
-
-// Counts an upload against max_concurrent_uploads for the lifetime of the request.
-class UploadSlot {
- public:
-  explicit UploadSlot(Context& ctx) : ctx_(ctx) {
-    if (++ctx_.uploads_in_progress > ctx_.options.max_concurrent_uploads) {
-      --ctx_.uploads_in_progress;
-      throw ApiError(503, "too_many_uploads",
-                     fmt::format("{} uploads are already in progress; try again later",
-                                 ctx_.options.max_concurrent_uploads));
-    }
-  }
-  ~UploadSlot() { --ctx_.uploads_in_progress; }
-  UploadSlot(const UploadSlot&) = delete;
-  UploadSlot& operator=(const UploadSlot&) = delete;
-
- private:
-  Context& ctx_;
-};
 
 // The temporary upload file; removed unless Release()d (ownership passes to the service).
 class TempUpload {
@@ -221,13 +204,23 @@ void DrainRejectedBody(const httplib::Request& req, httplib::Response& res,
   }
 }
 
-// POST /api/v1/jobs with a JSON body: {"stream_url": "...", "options": {...}} (a live stream).
-static void HandleCreateStreamJob(Context& ctx, httplib::Response& res, const httplib::ContentReader& reader) {
-  constexpr std::size_t kMaxBody = 64 * 1024;
+UploadSlot::UploadSlot(Context& ctx) : ctx_(ctx) {
+  if (++ctx_.uploads_in_progress > ctx_.options.max_concurrent_uploads) {
+    --ctx_.uploads_in_progress;
+    throw ApiError(503, "too_many_uploads",
+                   fmt::format("{} uploads are already in progress; try again later",
+                               ctx_.options.max_concurrent_uploads));
+  }
+}
+
+UploadSlot::~UploadSlot() { --ctx_.uploads_in_progress; }
+
+nlohmann::json ReadJsonObjectBody(httplib::Response& res, const httplib::ContentReader& reader, std::size_t max_bytes,
+                                  const char* what) {
   std::string body;
   bool too_large = false;
   reader([&](const char* data, std::size_t size) {
-    if (body.size() + size > kMaxBody) {
+    if (body.size() + size > max_bytes) {
       too_large = true;
       return false;
     }
@@ -236,21 +229,74 @@ static void HandleCreateStreamJob(Context& ctx, httplib::Response& res, const ht
   });
   if (too_large) {
     res.set_header("Connection", "close");
-    throw ApiError(413, "payload_too_large", fmt::format("a stream job's JSON body is at most {} bytes", kMaxBody));
+    throw ApiError(413, "payload_too_large", fmt::format("{} is at most {} bytes", what, max_bytes));
   }
-  const nlohmann::json j = nlohmann::json::parse(body, nullptr, /*allow_exceptions=*/false);
-  if (!j.is_object()) throw ApiError(400, "bad_request", "the body must be a JSON object {\"stream_url\": ...}");
+  nlohmann::json j = nlohmann::json::parse(body, nullptr, /*allow_exceptions=*/false);
+  if (!j.is_object()) throw ApiError(400, "bad_request", fmt::format("{} must be a JSON object", what));
+  return j;
+}
+
+// POST /api/v1/jobs with a JSON body: {"stream_url": "...", "options": {...}} (a live stream)
+// or {"upload_id": "...", "telemetry_upload_id": "...", "options": {...}} (a video sent as a
+// resumable upload, api/upload_store.h, and optionally its DJI .SRT track as another one).
+void HandleCreateJobFromJson(Context& ctx, httplib::Response& res, const httplib::ContentReader& reader) {
+  const nlohmann::json j = ReadJsonObjectBody(res, reader, 64 * 1024, "a JSON job request");
   for (const auto& [key, value] : j.items()) {
-    if (key != "stream_url" && key != "options") {
-      throw ApiError(400, "bad_request", fmt::format("unknown field \"{}\" (stream_url, options)", key));
+    if (key != "stream_url" && key != "upload_id" && key != "telemetry_upload_id" && key != "options") {
+      throw ApiError(400, "bad_request",
+                     fmt::format("unknown field \"{}\" (stream_url or upload_id, telemetry_upload_id, options)", key));
     }
   }
-  if (!j.contains("stream_url") || !j["stream_url"].is_string()) {
-    throw ApiError(400, "bad_request", "stream_url (a string) is required");
+  const bool stream = j.contains("stream_url");
+  if (stream == j.contains("upload_id")) {
+    throw ApiError(400, "bad_request", "a JSON job request names either a stream_url or an upload_id");
+  }
+  for (const char* key : {"stream_url", "upload_id", "telemetry_upload_id"}) {
+    if (j.contains(key) && !j[key].is_string()) throw ApiError(400, "bad_request", fmt::format("{} must be a string", key));
+  }
+  if (stream && j.contains("telemetry_upload_id")) {
+    throw ApiError(400, "bad_telemetry", "telemetry goes with an uploaded video, not a live stream");
   }
   const api::JobOptions options =
       j.contains("options") ? api::ParseJobOptions(j["options"]) : api::JobOptions{};
-  const api::Job job = ctx.service.CreateStreamJob(j["stream_url"].get<std::string>(), options);
+  api::Job job;
+  if (stream) {
+    job = ctx.service.CreateStreamJob(j["stream_url"].get<std::string>(), options);
+  } else {
+    const std::string upload_id = j["upload_id"].get<std::string>();
+    // Everything that can refuse the request is checked before the upload is consumed: a
+    // client told 503 or 400 still has its bytes on the server.
+    ctx.uploads.CompleteDataFile(upload_id);
+    std::string telemetry;
+    std::string telemetry_id;
+    if (j.contains("telemetry_upload_id")) {
+      telemetry_id = j["telemetry_upload_id"].get<std::string>();
+      if (telemetry_id == upload_id) throw ApiError(400, "bad_telemetry", "the telemetry is the video's own upload");
+      const fs::path file = ctx.uploads.CompleteDataFile(telemetry_id);
+      if (fs::file_size(file) > kMaxTelemetryBytes) {
+        throw ApiError(413, "payload_too_large",
+                       fmt::format("the telemetry upload is larger than {} MiB", kMaxTelemetryBytes >> 20));
+      }
+      std::ifstream in(file, std::ios::binary);
+      telemetry.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+      try {
+        ParseDjiSrt(telemetry);
+      } catch (const InputError& e) {
+        throw ApiError(400, "bad_telemetry", fmt::format("telemetry: {}", e.what()));
+      }
+    }
+    ctx.service.CheckCanQueue();
+    const fs::path video = ctx.service.NewUploadPath();
+    const api::UploadSession session = ctx.uploads.Take(upload_id, video);
+    if (!telemetry_id.empty()) {
+      try {
+        ctx.uploads.Remove(telemetry_id);  // its text travels with the job
+      } catch (const std::exception& e) {
+        GLAM_LOG_WARN("telemetry upload {} not removed: {}", telemetry_id, e.what());
+      }
+    }
+    job = ctx.service.CreateJob(video, session.filename, options, telemetry);
+  }
   res.set_header("Location", "/api/v1/jobs/" + job.id);
   SendJson(res, 201, api::JobToJson(job));
 }
@@ -262,7 +308,7 @@ void HandleCreateJob(Context& ctx, const httplib::Request& req, httplib::Respons
   const bool multipart = req.is_multipart_form_data();
   const bool raw = media_type.rfind("video/", 0) == 0 || media_type == "application/octet-stream";
   if (media_type == "application/json") {
-    HandleCreateStreamJob(ctx, res, reader);
+    HandleCreateJobFromJson(ctx, res, reader);
     return;
   }
   try {

@@ -222,6 +222,19 @@ async function main() {
 
     // 1. Upload through the page (the token arrives as ?token= and is kept by the page).
     await page.goto(`${base}/?token=${TOKEN}`);
+    // The video goes as a resumable upload: in 64 KiB chunks here (so the clip takes several),
+    // and the link "drops" once, on the second chunk: the page must ask the server where it is
+    // and go on, and the job must get exactly the clip's bytes.
+    await page.evaluate(() => localStorage.setItem('glam.uploadChunkBytes', String(64 * 1024)));
+    const patches = { sent: 0, aborted: 0 };
+    await page.route(/\/api\/v1\/uploads\/[0-9a-f]{16}$/, (route) => {
+      if (route.request().method() !== 'PATCH') return route.continue();
+      if (++patches.sent === 2) {
+        ++patches.aborted;
+        return route.abort('connectionreset');
+      }
+      return route.continue();
+    });
     // A live stream URL goes to the API as a stream job; this server was started without
     // --allow-streams, so the page shows the server's refusal and no job is created.
     await page.fill('#upload-form input[name=stream_url]', 'rtsp://127.0.0.1:9/live');
@@ -269,6 +282,11 @@ async function main() {
       return { ...v, matrices: v.tileMatrices(), pointBoxes: v.tilePointBoxes() };
     });
     const job = await api(base, `jobs/${jobId}`);
+    const clipBytes = readFileSync(opt.clip).length;
+    check(patches.aborted === 1 && patches.sent >= Math.ceil(clipBytes / (64 * 1024)) + 1 &&
+      job.input.size_bytes === clipBytes,
+      `the video went up in ${patches.sent} resumable chunks, one broken and resent, and the job got all ` +
+      `${job.input.size_bytes} of its ${clipBytes} bytes`);
     const report = await api(base, `jobs/${jobId}/report.json`);
     const tileset = await api(base, `jobs/${jobId}/tileset.json`);
     const children = tileset.root.children || [];

@@ -104,18 +104,9 @@ export async function deleteJob(id) {
   await apiFetch(apiUrl(`jobs/${encodeURIComponent(id)}`), { method: 'DELETE' });
 }
 
-// Multipart upload through XHR because fetch has no upload progress. options: the job
-// options object of docs/api.md ("Creating a job"); telemetry: the video's GPS track (a DJI
-// .SRT File) or null. onProgress(fraction in 0..1).
-export function uploadVideo(file, options, onProgress, telemetry = null) {
-  const form = new FormData();
-  form.append('video', file, file.name);
-  if (telemetry) form.append('telemetry', telemetry, telemetry.name);
-  return postJobForm(form, options, onProgress);
-}
-
-// A photo job: every file as an "images" field (the server maps them in name order and reads
-// their EXIF GPS).
+// A photo job: every file as an "images" field of one multipart upload, through XHR because
+// fetch has no upload progress (the server maps them in capture order and reads their EXIF
+// GPS). Videos go as resumable uploads (resumable_upload.js). onProgress(fraction in 0..1).
 export function uploadPhotos(files, options, onProgress) {
   const form = new FormData();
   for (const file of files) form.append('images', file, file.name);

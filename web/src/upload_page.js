@@ -5,7 +5,8 @@
 // Options follow docs/api.md "Creating a job": `focal` (pixels at the original resolution) or
 // `intrinsics` (an intrinsics.json object); not both.
 
-import { createStreamJob, uploadPhotos, uploadVideo } from './api.js';
+import { createStreamJob, uploadPhotos } from './api.js';
+import { createJobFromUploads } from './resumable_upload.js';
 
 const isImage = (f) => f.type.startsWith('image/') || /\.(jpe?g|png|tiff?|bmp|webp)$/i.test(f.name);
 
@@ -156,11 +157,12 @@ export function setupUploadPage(root, onCreated) {
       const telemetry = form.elements.telemetry.files[0] || null;
       if (input.photos && telemetry) throw new Error('photos carry their GPS in EXIF; a GPS track goes with a video');
       status.textContent = `Uploading ${label}…`;
-      const onProgress = (fraction) => {
+      const onProgress = (fraction, note = '') => {
         bar.value = fraction;
-        status.textContent = `Uploading ${label}: ${Math.round(fraction * 100)} %`;
+        status.textContent = `Uploading ${label}: ${Math.round(fraction * 100)} %${note ? ` (${note})` : ''}`;
       };
-      const job = input.video ? await uploadVideo(input.video, options, onProgress, telemetry)
+      // A video goes as a resumable upload: a dropped link costs a retry, not the whole file.
+      const job = input.video ? await createJobFromUploads(input.video, telemetry, options, onProgress)
                               : await uploadPhotos(input.photos, options, onProgress);
       bar.value = 1;
       status.textContent = `Job ${job.id} created (${job.state}).`;

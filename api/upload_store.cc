@@ -1,0 +1,342 @@
+#include "api/upload_store.h"
+
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+#include <fmt/format.h>
+
+#include "api/api_error.h"
+#include "api/ids.h"
+#include "api/job.h"
+#include "api/job_json.h"
+#include "engine/core/atomic_file.h"
+#include "engine/core/error.h"
+#include "engine/core/logging.h"
+
+namespace glam::api {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+constexpr const char* kMetaSuffix = ".json";
+constexpr const char* kDataSuffix = ".data";
+
+// The client's name without directories, at most 200 characters ("upload" when empty).
+std::string CleanFilename(const std::string& name) {
+  const auto slash = name.find_last_of("/\\");
+  std::string out = slash == std::string::npos ? name : name.substr(slash + 1);
+  if (out.size() > 200) out.erase(0, out.size() - 200);  // keeps the extension
+  return out.empty() ? "upload" : out;
+}
+
+// Length and modification time (epoch ms) of a file; false when it does not exist.
+bool StatFile(const fs::path& path, std::int64_t* size, std::int64_t* mtime_ms) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) return false;
+  *size = static_cast<std::int64_t>(st.st_size);
+  *mtime_ms = static_cast<std::int64_t>(st.st_mtim.tv_sec) * 1000 + st.st_mtim.tv_nsec / 1000000;
+  return true;
+}
+
+void RemoveQuietly(const fs::path& path) {
+  std::error_code ec;
+  fs::remove(path, ec);
+  if (ec) GLAM_LOG_WARN("cannot remove {}: {}", path.string(), ec.message());
+}
+
+[[noreturn]] void ThrowStorageError(int error_number, const std::string& what) {
+  if (error_number == ENOSPC || error_number == EDQUOT || error_number == EFBIG) {
+    throw ApiError(507, "insufficient_storage", "the server's disk is full; the bytes that fit were kept");
+  }
+  throw EnvironmentError(fmt::format("{}: {}", what, std::strerror(error_number)));
+}
+
+}  // namespace
+
+void UploadStoreOptions::Check() const {
+  if (dir.empty()) throw InputError("the upload directory is not set");
+  if (max_bytes < 1) throw InputError("the upload size limit must be at least 1 byte");
+  if (max_sessions < 1) throw InputError(fmt::format("--max-open-uploads must be at least 1, got {}", max_sessions));
+  if (expiry.count() < 60) {
+    throw InputError(fmt::format("the upload expiry must be at least 60 s, got {} s", expiry.count()));
+  }
+}
+
+json UploadToJson(const UploadSession& s, std::chrono::seconds expiry) {
+  const std::int64_t expires_ms = s.updated_ms + std::chrono::duration_cast<std::chrono::milliseconds>(expiry).count();
+  return {{"id", s.id},
+          {"filename", s.filename},
+          {"size", s.size},
+          {"offset", s.offset},
+          {"complete", s.complete()},
+          {"created_at", FormatTimestamp(s.created_ms)},
+          {"updated_at", FormatTimestamp(s.updated_ms)},
+          {"expires_at", FormatTimestamp(expires_ms)},
+          {"url", "/api/v1/uploads/" + s.id}};
+}
+
+UploadStore::UploadStore(UploadStoreOptions options) : options_(std::move(options)) {
+  options_.Check();
+  std::error_code ec;
+  fs::create_directories(options_.dir, ec);
+  if (ec) {
+    throw EnvironmentError(fmt::format("cannot create upload directory {}: {}", options_.dir.string(), ec.message()));
+  }
+  // Stray files: a data file without its session (the process stopped inside Create) or a
+  // session without data (removed by hand), and anything else.
+  for (const fs::directory_entry& entry : fs::directory_iterator(options_.dir, ec)) {
+    const fs::path& p = entry.path();
+    const std::string id = p.stem().string();
+    const std::string ext = p.extension().string();
+    const bool ours = IsValidJobId(id) && (ext == kMetaSuffix || ext == kDataSuffix);
+    const fs::path partner = ext == kMetaSuffix ? DataPath(id) : MetaPath(id);
+    if (!ours || !fs::exists(partner)) {
+      GLAM_LOG_INFO("removing stray upload file {}", p.string());
+      RemoveQuietly(p);
+    }
+  }
+  const int expired = RemoveExpired();
+  const int open = open_sessions();
+  if (open > 0 || expired > 0) {
+    GLAM_LOG_INFO("{} resumable uploads open, {} expired ones removed", open, expired);
+  }
+}
+
+fs::path UploadStore::MetaPath(const std::string& id) const { return options_.dir / (id + kMetaSuffix); }
+fs::path UploadStore::DataPath(const std::string& id) const { return options_.dir / (id + kDataSuffix); }
+
+UploadSession UploadStore::LoadLocked(const std::string& id) const {
+  if (!IsValidJobId(id)) {
+    throw ApiError(400, "invalid_id", fmt::format("\"{}\" is not an upload id (16 hex characters)", id));
+  }
+  UploadSession s;
+  s.id = id;
+  std::int64_t meta_size = 0, meta_mtime = 0;
+  if (!StatFile(MetaPath(id), &meta_size, &meta_mtime) || !StatFile(DataPath(id), &s.offset, &s.updated_ms)) {
+    throw ApiError(404, "not_found", fmt::format("no upload with id {} (it may have expired)", id));
+  }
+  std::ifstream in(MetaPath(id));
+  std::stringstream text;
+  text << in.rdbuf();
+  const json meta = json::parse(text.str(), nullptr, /*allow_exceptions=*/false);
+  if (!meta.is_object() || !meta.contains("size") || !meta["size"].is_number_integer()) {
+    throw EnvironmentError(fmt::format("upload record {} is unreadable", MetaPath(id).string()));
+  }
+  s.size = meta["size"].get<std::int64_t>();
+  s.filename = meta.value("filename", std::string("upload"));
+  s.created_ms = meta.value("created_ms", meta_mtime);
+  return s;
+}
+
+std::vector<UploadSession> UploadStore::ListLocked() const {
+  std::vector<UploadSession> out;
+  std::error_code ec;
+  for (const fs::directory_entry& entry : fs::directory_iterator(options_.dir, ec)) {
+    if (entry.path().extension() != kMetaSuffix) continue;
+    try {
+      out.push_back(LoadLocked(entry.path().stem().string()));
+    } catch (const std::exception&) {
+      // Removed meanwhile, or not ours: the constructor's sweep handles strays.
+    }
+  }
+  return out;
+}
+
+int UploadStore::open_sessions() const {
+  std::lock_guard lock(mutex_);
+  return static_cast<int>(ListLocked().size());
+}
+
+UploadSession UploadStore::Create(std::int64_t size, const std::string& filename) {
+  if (size < 1) throw ApiError(400, "bad_request", fmt::format("size must be at least 1 byte, got {}", size));
+  if (size > options_.max_bytes) {
+    throw ApiError(413, "payload_too_large",
+                   fmt::format("the upload would have {} bytes; the limit is {} bytes", size, options_.max_bytes));
+  }
+  RemoveExpired();
+  std::lock_guard lock(mutex_);
+  const std::vector<UploadSession> open = ListLocked();
+  if (static_cast<int>(open.size()) >= options_.max_sessions) {
+    throw ApiError(503, "too_many_uploads",
+                   fmt::format("{} resumable uploads are open (limit {}); finish or delete one, or try later",
+                               open.size(), options_.max_sessions));
+  }
+  // Space the open sessions will still need is as good as taken.
+  std::int64_t expected = 0;
+  for (const UploadSession& s : open) expected += s.size - s.offset;
+  std::error_code ec;
+  const fs::space_info space = fs::space(options_.dir, ec);
+  if (!ec && static_cast<std::int64_t>(space.available) - expected < size) {
+    throw ApiError(507, "insufficient_storage",
+                   fmt::format("the upload would have {} bytes but only {} bytes are free ({} of them promised to "
+                               "open uploads)",
+                               size, space.available, expected));
+  }
+  UploadSession s;
+  do {
+    s.id = NewJobId();
+  } while (fs::exists(MetaPath(s.id)) || fs::exists(DataPath(s.id)));
+  s.filename = CleanFilename(filename);
+  s.size = size;
+  s.created_ms = NowMs();
+  s.updated_ms = s.created_ms;
+  // The data file first: a stray one is removed at startup, a session without it is not.
+  std::FILE* data = std::fopen(DataPath(s.id).c_str(), "wb");
+  if (data == nullptr) ThrowStorageError(errno, fmt::format("cannot create {}", DataPath(s.id).string()));
+  std::fclose(data);
+  try {
+    WriteFileAtomically(MetaPath(s.id),
+                        json{{"size", s.size}, {"filename", s.filename}, {"created_ms", s.created_ms}}.dump());
+  } catch (...) {
+    RemoveQuietly(DataPath(s.id));
+    throw;
+  }
+  GLAM_LOG_INFO("upload {} opened: {} bytes of {}", s.id, s.size, s.filename);
+  return s;
+}
+
+UploadSession UploadStore::Get(const std::string& id) const {
+  std::lock_guard lock(mutex_);
+  return LoadLocked(id);
+}
+
+UploadStore::Appender UploadStore::Append(const std::string& id, std::int64_t offset) {
+  std::lock_guard lock(mutex_);
+  const UploadSession s = LoadLocked(id);
+  if (busy_.count(id)) {
+    throw ApiError(409, "upload_busy", fmt::format("another request is sending bytes of upload {}", id));
+  }
+  if (offset != s.offset) {
+    throw ApiError(409, "offset_mismatch",
+                   fmt::format("upload {} has {} bytes; send from offset {}, not {}", id, s.offset, s.offset, offset));
+  }
+  if (s.complete()) {
+    throw ApiError(409, "upload_complete", fmt::format("upload {} already has all its {} bytes", id, s.size));
+  }
+  std::FILE* file = std::fopen(DataPath(id).c_str(), "ab");
+  if (file == nullptr) ThrowStorageError(errno, fmt::format("cannot open {}", DataPath(id).string()));
+  busy_.insert(id);
+  return Appender(this, s, file);
+}
+
+UploadSession UploadStore::Take(const std::string& id, const fs::path& destination) {
+  std::lock_guard lock(mutex_);
+  const UploadSession s = LoadLocked(id);
+  if (busy_.count(id)) {
+    throw ApiError(409, "upload_busy", fmt::format("another request is sending bytes of upload {}", id));
+  }
+  if (!s.complete()) {
+    throw ApiError(409, "upload_incomplete",
+                   fmt::format("upload {} has {} of its {} bytes; send the rest first", id, s.offset, s.size));
+  }
+  std::error_code ec;
+  fs::rename(DataPath(id), destination, ec);
+  if (ec) throw EnvironmentError(fmt::format("cannot move upload {}: {}", id, ec.message()));
+  RemoveQuietly(MetaPath(id));
+  GLAM_LOG_INFO("upload {} complete ({} bytes), handed to a job", id, s.size);
+  return s;
+}
+
+fs::path UploadStore::CompleteDataFile(const std::string& id) const {
+  std::lock_guard lock(mutex_);
+  const UploadSession s = LoadLocked(id);
+  if (busy_.count(id)) {
+    throw ApiError(409, "upload_busy", fmt::format("another request is sending bytes of upload {}", id));
+  }
+  if (!s.complete()) {
+    throw ApiError(409, "upload_incomplete",
+                   fmt::format("upload {} has {} of its {} bytes; send the rest first", id, s.offset, s.size));
+  }
+  return DataPath(id);
+}
+
+void UploadStore::Remove(const std::string& id) {
+  std::lock_guard lock(mutex_);
+  LoadLocked(id);
+  if (busy_.count(id)) {
+    throw ApiError(409, "upload_busy", fmt::format("another request is sending bytes of upload {}", id));
+  }
+  RemoveQuietly(MetaPath(id));
+  RemoveQuietly(DataPath(id));
+  GLAM_LOG_INFO("upload {} deleted", id);
+}
+
+int UploadStore::RemoveExpired() {
+  std::lock_guard lock(mutex_);
+  const std::int64_t cutoff = NowMs() - std::chrono::duration_cast<std::chrono::milliseconds>(options_.expiry).count();
+  int removed = 0;
+  for (const UploadSession& s : ListLocked()) {
+    if (busy_.count(s.id) || s.updated_ms >= cutoff) continue;
+    GLAM_LOG_INFO("upload {} expired ({} of {} bytes, last byte at {}): removed", s.id, s.offset, s.size,
+                  FormatTimestamp(s.updated_ms));
+    RemoveQuietly(MetaPath(s.id));
+    RemoveQuietly(DataPath(s.id));
+    ++removed;
+  }
+  return removed;
+}
+
+void UploadStore::Release(const std::string& id) {
+  std::lock_guard lock(mutex_);
+  busy_.erase(id);
+}
+
+UploadStore::Appender::Appender(UploadStore* store, UploadSession session, std::FILE* file)
+    : store_(store), session_(std::move(session)), file_(file) {}
+
+UploadStore::Appender::Appender(Appender&& other) noexcept
+    : store_(other.store_), session_(std::move(other.session_)), file_(other.file_),
+      too_large_(other.too_large_), error_number_(other.error_number_) {
+  other.store_ = nullptr;
+  other.file_ = nullptr;
+}
+
+UploadStore::Appender::~Appender() {
+  if (store_ == nullptr) return;
+  Close();
+  store_->Release(session_.id);
+}
+
+bool UploadStore::Appender::Write(const char* data, std::size_t size) {
+  if (file_ == nullptr || error_number_ != 0) return false;
+  const std::int64_t room = session_.size - session_.offset;
+  const std::size_t n = static_cast<std::int64_t>(size) > room ? static_cast<std::size_t>(room) : size;
+  if (n > 0) {
+    const std::size_t written = std::fwrite(data, 1, n, file_);
+    session_.offset += static_cast<std::int64_t>(written);
+    if (written != n) {
+      error_number_ = errno != 0 ? errno : EIO;
+      return false;
+    }
+  }
+  if (n < size) {
+    too_large_ = true;
+    return false;
+  }
+  return true;
+}
+
+bool UploadStore::Appender::Close() {
+  if (file_ == nullptr) return error_number_ == 0;
+  const bool ok = std::fflush(file_) == 0 && ::fsync(fileno(file_)) == 0;
+  if (!ok && error_number_ == 0) error_number_ = errno;
+  std::fclose(file_);
+  file_ = nullptr;
+  return ok;
+}
+
+UploadSession UploadStore::Appender::Finish() {
+  const bool ok = Close();
+  // The file is the truth: after a short write, what landed on disk is the offset.
+  UploadSession now = store_->Get(session_.id);
+  if (!ok || error_number_ != 0) ThrowStorageError(error_number_, fmt::format("cannot store upload {}", session_.id));
+  return now;
+}
+
+}  // namespace glam::api

@@ -1,0 +1,144 @@
+// Resumable uploads (docs/api.md, "Resumable uploads"): a drone video is often several GB
+// and sent over a mobile or site link that drops. A one-shot POST /api/v1/jobs then has to
+// start again from byte 0; an upload session instead keeps every byte that arrived, across
+// dropped connections and server restarts, and the client continues from the offset the
+// server reports (the tus.io idea, without its protocol negotiation).
+//
+// On disk, next to the job store (DIR/resumable/):
+//   <id>.json   the session: declared size, client file name, creation time (written once)
+//   <id>.data   the bytes received so far; its length *is* the offset, so a crash can never
+//               leave the two disagreeing, and nothing needs rewriting per chunk
+// A session untouched for `expiry` is removed (at startup and whenever a session is created),
+// as is a file without its partner.
+//
+// Thread-safety: all methods may be called concurrently; one Appender per session at a time
+// (a second one is refused with 409 "upload_busy" instead of interleaving bytes).
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <mutex>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace glam::api {
+
+struct UploadStoreOptions {
+  std::filesystem::path dir;  // DIR/resumable
+  // Largest declared size (the server's --max-upload-mb).
+  std::int64_t max_bytes = 20LL << 30;
+  // Open sessions at once (503 "too_many_uploads" beyond): each may hold a reservation of
+  // disk space, so a client cannot make the server refuse everyone else by opening many.
+  int max_sessions = 64;
+  // A session whose last byte arrived longer ago than this is removed with its data.
+  std::chrono::seconds expiry = std::chrono::hours(24);
+
+  void Check() const;  // throws InputError
+};
+
+struct UploadSession {
+  std::string id;
+  std::string filename;  // as the client named it (display only; never a path)
+  std::int64_t size = 0;    // declared total
+  std::int64_t offset = 0;  // bytes received
+  std::int64_t created_ms = 0;
+  std::int64_t updated_ms = 0;  // when the last byte arrived (creation if none)
+  bool complete() const { return offset == size; }
+};
+
+// The session as JSON: id, filename, size, offset, complete, created_at, updated_at,
+// expires_at (ISO 8601 UTC) and url.
+nlohmann::json UploadToJson(const UploadSession& session, std::chrono::seconds expiry);
+
+class UploadStore {
+ public:
+  // Creates the directory and removes expired sessions and stray files. Throws
+  // EnvironmentError when the directory cannot be created.
+  explicit UploadStore(UploadStoreOptions options);
+
+  const UploadStoreOptions& options() const { return options_; }
+
+  // A new empty session for `size` bytes. ApiError: 400 "bad_request" (size < 1), 413
+  // "payload_too_large" (size > max_bytes), 503 "too_many_uploads", 507
+  // "insufficient_storage" (the free disk minus what the open sessions still expect is less
+  // than `size`).
+  UploadSession Create(std::int64_t size, const std::string& filename);
+
+  // ApiError 400 "invalid_id", 404 "not_found".
+  UploadSession Get(const std::string& id) const;
+
+  // Appends bytes to one session; the session is held until destruction. Bytes are written as
+  // they arrive and kept whatever happens to the request (that is the point); Finish() makes
+  // them durable (fsync) and the destructor does too when Finish() was not reached.
+  class Appender {
+   public:
+    Appender(Appender&& other) noexcept;
+    Appender& operator=(Appender&&) = delete;
+    Appender(const Appender&) = delete;
+    Appender& operator=(const Appender&) = delete;
+    ~Appender();
+
+    // Writes what fits in the declared size. False when the chunk went past it (the bytes
+    // beyond were dropped: too_large()) or the disk refused it (error_number()).
+    bool Write(const char* data, std::size_t size);
+    // Flushes and syncs; returns the session as it now is. Throws EnvironmentError (or
+    // ApiError 507 for a full disk) when the bytes could not be made durable.
+    UploadSession Finish();
+
+    bool too_large() const { return too_large_; }
+    int error_number() const { return error_number_; }
+    std::int64_t offset() const { return session_.offset; }
+
+   private:
+    friend class UploadStore;
+    Appender(UploadStore* store, UploadSession session, std::FILE* file);
+    bool Close();
+
+    UploadStore* store_;
+    UploadSession session_;
+    std::FILE* file_;
+    bool too_large_ = false;
+    int error_number_ = 0;
+  };
+
+  // ApiError: 400 / 404 as Get, 409 "upload_busy" (another request is appending), 409
+  // "offset_mismatch" (`offset` is not the session's offset: the client resends from the
+  // offset GET reports), 409 "upload_complete" (nothing left to send).
+  Appender Append(const std::string& id, std::int64_t offset);
+
+  // Ends a complete session and moves its bytes to `destination` (same file system); the
+  // session is gone afterwards. ApiError: 400 / 404 as Get, 409 "upload_busy", 409
+  // "upload_incomplete". Returns the session as it was.
+  UploadSession Take(const std::string& id, const std::filesystem::path& destination);
+
+  // The data file of a complete session, to read (a telemetry track); the session stays.
+  // Same errors as Take.
+  std::filesystem::path CompleteDataFile(const std::string& id) const;
+
+  // Removes the session and its bytes. 400 / 404 as Get, 409 "upload_busy".
+  void Remove(const std::string& id);
+
+  // Removes sessions whose last byte is older than the expiry; returns how many.
+  int RemoveExpired();
+
+  int open_sessions() const;
+
+ private:
+  std::filesystem::path MetaPath(const std::string& id) const;
+  std::filesystem::path DataPath(const std::string& id) const;
+  // Reads a session from disk; nullopt-like: throws 404 when missing. Under mutex_.
+  UploadSession LoadLocked(const std::string& id) const;
+  std::vector<UploadSession> ListLocked() const;
+  void Release(const std::string& id);
+
+  UploadStoreOptions options_;
+  mutable std::mutex mutex_;
+  std::set<std::string> busy_;  // sessions with an Appender
+};
+
+}  // namespace glam::api

@@ -1,0 +1,258 @@
+// Resumable uploads over real HTTP (/api/v1/uploads, server/http_resumable_upload.cc): a video
+// sent in chunks becomes a job with exactly its bytes; a PATCH whose connection breaks keeps
+// what arrived, and so does a server restart; every refusal is a documented JSON error that
+// leaves the upload usable.
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <string>
+#include <thread>
+
+#include <gtest/gtest.h>
+
+#include "api/job_service.h"
+#include "server/http_server.h"
+#include "tests/server/http_api_fixture.h"
+
+namespace glam::server {
+namespace {
+
+class ResumableUploadTest : public HttpApiTest {
+ protected:
+  // POST /api/v1/uploads; the new upload's id.
+  std::string Open(httplib::Client& client, std::int64_t size, const std::string& filename) {
+    auto res = client.Post("/api/v1/uploads", json{{"size", size}, {"filename", filename}}.dump(), "application/json");
+    EXPECT_TRUE(res);
+    if (!res) return "";
+    EXPECT_EQ(res->status, 201) << res->body;
+    const json upload = json::parse(res->body);
+    EXPECT_EQ(res->get_header_value("Location"), "/api/v1/uploads/" + upload["id"].get<std::string>());
+    EXPECT_EQ(upload["offset"], 0);
+    EXPECT_EQ(upload["size"], size);
+    return upload["id"];
+  }
+
+  httplib::Result Patch(httplib::Client& client, const std::string& id, std::int64_t offset, const std::string& bytes,
+                        const std::string& type = "application/offset+octet-stream") {
+    return client.Patch("/api/v1/uploads/" + id, {{"Upload-Offset", std::to_string(offset)}}, bytes, type.c_str());
+  }
+
+  // Sends `bytes` from `offset` in chunks of `chunk`, checking each answer.
+  void SendFrom(httplib::Client& client, const std::string& id, const std::string& bytes, std::size_t offset,
+                std::size_t chunk) {
+    for (std::size_t at = offset; at < bytes.size(); at += chunk) {
+      const std::string part = bytes.substr(at, chunk);
+      auto res = Patch(client, id, static_cast<std::int64_t>(at), part);
+      ASSERT_TRUE(res);
+      ASSERT_EQ(res->status, 200) << res->body;
+      const std::int64_t now = static_cast<std::int64_t>(at + part.size());
+      EXPECT_EQ(res->get_header_value("Upload-Offset"), std::to_string(now));
+      const json upload = json::parse(res->body);
+      EXPECT_EQ(upload["offset"], now);
+      EXPECT_EQ(upload["complete"], now == upload["size"].get<std::int64_t>());
+    }
+  }
+
+  std::int64_t OffsetOf(httplib::Client& client, const std::string& id) {
+    auto res = client.Get("/api/v1/uploads/" + id);
+    EXPECT_TRUE(res);
+    if (!res || res->status != 200) return -1;
+    EXPECT_EQ(res->get_header_value("Upload-Offset"), std::to_string(json::parse(res->body)["offset"].get<std::int64_t>()));
+    return json::parse(res->body)["offset"];
+  }
+
+  httplib::Result CreateJobFrom(httplib::Client& client, const json& request) {
+    return client.Post("/api/v1/jobs", request.dump(), "application/json");
+  }
+
+  // Sends a PATCH whose body stops after `sent` of `declared` bytes and closes the connection,
+  // as a dropped mobile link does.
+  void SendBrokenPatch(const std::string& id, std::int64_t offset, const std::string& sent, std::size_t declared) {
+    const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+    ASSERT_GE(fd, 0);
+    sockaddr_in addr{};
+    addr.sin_family = AF_INET;
+    addr.sin_port = htons(static_cast<std::uint16_t>(port_));
+    addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    ASSERT_EQ(::connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
+    const std::string request = "PATCH /api/v1/uploads/" + id + " HTTP/1.1\r\nHost: 127.0.0.1\r\n" +
+                                "Content-Type: application/offset+octet-stream\r\nUpload-Offset: " +
+                                std::to_string(offset) + "\r\nContent-Length: " + std::to_string(declared) +
+                                "\r\n\r\n" + sent;
+    ASSERT_EQ(::send(fd, request.data(), request.size(), 0), static_cast<ssize_t>(request.size()));
+    ::close(fd);
+  }
+};
+
+TEST_F(ResumableUploadTest, AVideoSentInChunksBecomesAJobWithExactlyItsBytes) {
+  Start({}, "resumable_chunks");
+  auto client = Client();
+  const std::string video = glam::testing::ReadFile(video_);
+  ASSERT_GT(video.size(), 3000u);
+  const std::string id = Open(client, static_cast<std::int64_t>(video.size()), "flights/DJI_0042.avi");
+  SendFrom(client, id, video, 0, 1000);
+  auto res = client.Get("/api/v1/uploads/" + id);
+  ASSERT_TRUE(res);
+  const json upload = json::parse(res->body);
+  EXPECT_EQ(upload["complete"], true);
+  EXPECT_EQ(upload["filename"], "DJI_0042.avi");
+
+  res = CreateJobFrom(client, {{"upload_id", id}, {"options", {{"name", "chunked"}}}});
+  ASSERT_TRUE(res);
+  ASSERT_EQ(res->status, 201) << res->body;
+  const json job = json::parse(res->body);
+  EXPECT_EQ(job["name"], "chunked");
+  EXPECT_EQ(job["input"]["filename"], "DJI_0042.avi");
+  EXPECT_EQ(job["input"]["size_bytes"], video.size());
+  const auto events = FollowToEnd(client, job["id"]);
+  ASSERT_FALSE(events.empty());
+  EXPECT_EQ(events.back().data["state"], "completed");
+  {
+    std::lock_guard lock(ran_mutex_);
+    EXPECT_EQ(ran_input_.extension(), ".avi");
+    EXPECT_EQ(glam::testing::ReadFile(ran_input_), video);
+  }
+  // The upload was consumed by the job.
+  ExpectError(client.Get("/api/v1/uploads/" + id), 404, "not_found", "consumed upload");
+  ExpectError(CreateJobFrom(client, {{"upload_id", id}}), 404, "not_found", "second job from one upload");
+  EXPECT_TRUE(fs::is_empty(dir_ / "data" / "resumable"));
+}
+
+TEST_F(ResumableUploadTest, ABrokenConnectionAndARestartKeepTheBytesThatArrived) {
+  Start({}, "resumable_broken");
+  auto client = Client();
+  const std::string video = glam::testing::ReadFile(video_);
+  const std::string id = Open(client, static_cast<std::int64_t>(video.size()), "clip.avi");
+  SendFrom(client, id, video.substr(0, 1000), 0, 1000);
+  // 700 of 2000 bytes arrive, then the link drops.
+  SendBrokenPatch(id, 1000, video.substr(1000, 700), 2000);
+  // Until the server has seen the connection end, a PATCH is refused as busy (never
+  // interleaved); then as an offset mismatch (offset 0 is wrong either way).
+  std::int64_t offset = -1;
+  for (auto deadline = std::chrono::steady_clock::now() + 10s; std::chrono::steady_clock::now() < deadline;) {
+    auto probe = Patch(client, id, 0, "x");
+    ASSERT_TRUE(probe);
+    ASSERT_EQ(probe->status, 409) << probe->body;
+    const std::string code = json::parse(probe->body)["error"]["code"];
+    ASSERT_TRUE(code == "upload_busy" || code == "offset_mismatch") << code;
+    if (code == "offset_mismatch") {
+      offset = std::stoll(probe->get_header_value("Upload-Offset"));
+      break;
+    }
+    std::this_thread::sleep_for(20ms);
+  }
+  ASSERT_EQ(offset, 1700);
+  ASSERT_EQ(OffsetOf(client, id), 1700);
+
+  // The server restarts: the upload is still there, at the same offset.
+  Stop();
+  Launch();
+  auto after = Client();
+  ASSERT_EQ(OffsetOf(after, id), 1700);
+  // A client that resends from its own last confirmed offset is told where to go on.
+  auto stale = Patch(after, id, 1000, video.substr(1000, 100));
+  ExpectError(stale, 409, "offset_mismatch", "resend from an old offset");
+  EXPECT_EQ(stale->get_header_value("Upload-Offset"), "1700");
+  ExpectError(CreateJobFrom(after, {{"upload_id", id}}), 409, "upload_incomplete", "job from a partial upload");
+  SendFrom(after, id, video, 1700, 1500);
+
+  auto res = CreateJobFrom(after, {{"upload_id", id}});
+  ASSERT_TRUE(res);
+  ASSERT_EQ(res->status, 201) << res->body;
+  EXPECT_EQ(FollowToEnd(after, json::parse(res->body)["id"]).back().data["state"], "completed");
+  std::lock_guard lock(ran_mutex_);
+  EXPECT_EQ(glam::testing::ReadFile(ran_input_), video);
+}
+
+TEST_F(ResumableUploadTest, RefusalsAreDocumentedErrorsAndLeaveTheUploadUsable) {
+  HttpServerOptions options;
+  options.max_open_uploads = 3;
+  Start(options, "resumable_errors");
+  auto client = Client();
+  auto open = [&](const std::string& body) { return client.Post("/api/v1/uploads", body, "application/json"); };
+  ExpectError(open("{"), 400, "bad_request", "not JSON");
+  ExpectError(open(R"({"filename": "a.mp4"})"), 400, "bad_request", "no size");
+  ExpectError(open(R"({"size": "12"})"), 400, "bad_request", "size not a number");
+  ExpectError(open(R"({"size": 0})"), 400, "bad_request", "empty");
+  ExpectError(open(R"({"size": 12, "md5": "x"})"), 400, "bad_request", "unknown field");
+  ExpectError(open(R"({"size": 2097152})"), 413, "payload_too_large", "over --max-upload-mb (1 MiB here)");
+
+  const std::string id = Open(client, 10, "a.mp4");
+  ExpectError(client.Patch("/api/v1/uploads/" + id, "0123", "application/offset+octet-stream"), 400, "bad_request",
+              "no Upload-Offset");
+  ExpectError(client.Patch("/api/v1/uploads/" + id, {{"Upload-Offset", "-1"}}, "0123",
+                           "application/offset+octet-stream"),
+              400, "bad_request", "negative offset");
+  ExpectError(Patch(client, id, 0, "0123", "text/plain"), 415, "unsupported_media_type", "text body");
+  ExpectError(Patch(client, id, 0, "0123456789ab"), 413, "payload_too_large", "past the size");
+  ExpectError(Patch(client, id, 3, "0123"), 409, "offset_mismatch", "gap");
+  ExpectError(Patch(client, "0123456789abcdef", 0, "0123"), 404, "not_found", "unknown upload");
+  ExpectError(Patch(client, "ABC", 0, "0123"), 400, "invalid_id", "malformed id");
+  ExpectError(client.Get("/api/v1/uploads/.."), 400, "invalid_id", "path trick");
+  EXPECT_EQ(OffsetOf(client, id), 0);  // nothing refused was stored
+
+  // Job requests that cannot be served keep the upload.
+  ExpectError(CreateJobFrom(client, {{"upload_id", id}}), 409, "upload_incomplete", "incomplete");
+  const std::string video_id = Open(client, static_cast<std::int64_t>(glam::testing::ReadFile(video_).size()), "v.avi");
+  SendFrom(client, video_id, glam::testing::ReadFile(video_), 0, 4096);
+  ExpectError(CreateJobFrom(client, {{"upload_id", video_id}, {"stream_url", "rtsp://cam/live"}}), 400, "bad_request",
+              "upload and stream");
+  ExpectError(CreateJobFrom(client, {{"upload_id", video_id}, {"options", {{"stride", 0}}}}), 400, "",
+              "bad options");
+  ExpectError(CreateJobFrom(client, {{"upload_id", 5}}), 400, "bad_request", "id not a string");
+  ExpectError(CreateJobFrom(client, {{"upload_id", video_id}, {"telemetry_upload_id", "0123456789abcdef"}}), 404,
+              "not_found", "unknown telemetry upload");
+  const std::string srt_id = Open(client, 9, "DJI_0042.SRT");
+  SendFrom(client, srt_id, "no GPS.\n\n", 0, 100);
+  ExpectError(CreateJobFrom(client, {{"upload_id", video_id}, {"telemetry_upload_id", srt_id}}), 400, "bad_telemetry",
+              "telemetry without positions");
+  EXPECT_EQ(OffsetOf(client, video_id), static_cast<std::int64_t>(glam::testing::ReadFile(video_).size()));
+  ExpectError(open(R"({"size": 5})"), 503, "too_many_uploads", "over --max-open-uploads");
+  auto metrics = client.Get("/api/v1/metrics");
+  ASSERT_TRUE(metrics);
+  EXPECT_NE(metrics->body.find("glam_resumable_uploads_open 3\n"), std::string::npos) << metrics->body;
+
+  ASSERT_EQ(client.Delete("/api/v1/uploads/" + srt_id)->status, 204);
+  ExpectError(client.Get("/api/v1/uploads/" + srt_id), 404, "not_found", "deleted upload");
+  auto res = CreateJobFrom(client, {{"upload_id", video_id}});
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 201) << res->body;
+}
+
+// A body longer than what is left of the declared size: with a Content-Length it is refused
+// before any byte is stored; sent chunked (no length known up front) the bytes up to the size
+// are kept. A complete upload that is no video makes no job and is gone.
+TEST_F(ResumableUploadTest, TooManyBytesAndACompleteUploadThatIsNoVideo) {
+  Start({}, "resumable_not_video");
+  auto client = Client();
+  const std::string id = Open(client, 10, "a.mp4");
+  auto res = Patch(client, id, 0, "not a video");
+  ExpectError(res, 413, "payload_too_large", "one byte too many, declared");
+  EXPECT_EQ(res->get_header_value("Upload-Offset"), "0");
+  EXPECT_EQ(OffsetOf(client, id), 0);
+
+  const std::string body = "not a video";
+  res = client.Patch(
+      "/api/v1/uploads/" + id, {{"Upload-Offset", "0"}},
+      [&](std::size_t, httplib::DataSink& sink) {
+        sink.write(body.data(), body.size());
+        sink.done();
+        return true;
+      },
+      "application/offset+octet-stream");
+  ExpectError(res, 413, "payload_too_large", "one byte too many, chunked");
+  EXPECT_EQ(res->get_header_value("Upload-Offset"), "10");
+  auto after = Client();
+  EXPECT_EQ(OffsetOf(after, id), 10);
+  ExpectError(Patch(after, id, 10, "x"), 409, "upload_complete", "nothing left");
+  ExpectError(CreateJobFrom(after, {{"upload_id", id}}), 422, "unsupported_video", "not a video");
+  ExpectError(after.Get("/api/v1/uploads/" + id), 404, "not_found", "consumed by the refused job");
+  EXPECT_TRUE(fs::is_empty(dir_ / "data" / "uploads"));
+  EXPECT_TRUE(fs::is_empty(dir_ / "data" / "resumable"));
+}
+
+}  // namespace
+}  // namespace glam::server
