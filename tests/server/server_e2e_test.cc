@@ -1,8 +1,9 @@
 // `glam serve` as a real process with the real engine on a tiny synthetic clip (CTest fixture
 // synth_server_tiny): a full job followed over SSE and checked against ground truth, cancel
 // and restart mid-run, kill -9 mid-job + restart on the same data directory (the job is
-// listed, resumes and completes), SIGTERM exits 0 leaving the job resumable, and a live-stream
-// job mapping what an ffmpeg sender pushes until it is finished over REST.
+// listed, resumes and completes), kill -9 mid-upload (a resumable upload goes on after the
+// restart), SIGTERM exits 0 leaving the job resumable, and a live-stream job mapping what an
+// ffmpeg sender pushes until it is finished over REST.
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -315,6 +316,54 @@ TEST(ServerE2E, KilledServerResumesTheJobAfterRestart) {
   res = client.Get("/api/v1/jobs");
   ASSERT_TRUE(res);
   EXPECT_EQ(json::parse(res->body)["total"], 1);
+  server.Signal(SIGTERM);
+  EXPECT_EQ(server.Wait(30), 0);
+}
+
+// A resumable upload cut by kill -9 of the server: after the restart the bytes that were
+// confirmed are there, the client sends the rest, and the video maps like any other.
+TEST(ServerE2E, KilledServerKeepsAResumableUpload) {
+  const fs::path dir = glam::testing::FreshTempDir("e2e_kill_upload");
+  const std::string video = glam::testing::ReadFile(kClip / "video.mp4");
+  const std::size_t half = video.size() / 2;
+  std::string upload_id;
+  {
+    ServerProcess server;
+    ASSERT_TRUE(server.Start(GLAM_BIN, dir / "data")) << server.error();
+    auto client = ClientFor(server);
+    auto res = client.Post("/api/v1/uploads", json{{"size", video.size()}, {"filename", "tiny.mp4"}}.dump(),
+                           "application/json");
+    ASSERT_TRUE(res);
+    ASSERT_EQ(res->status, 201) << res->body;
+    upload_id = json::parse(res->body)["id"];
+    res = client.Patch("/api/v1/uploads/" + upload_id, {{"Upload-Offset", "0"}}, video.substr(0, half),
+                       "application/offset+octet-stream");
+    ASSERT_TRUE(res);
+    ASSERT_EQ(res->status, 200) << res->body;
+    server.Signal(SIGKILL);
+    EXPECT_EQ(server.Wait(10), 128 + SIGKILL);
+  }
+  ServerProcess server;
+  ASSERT_TRUE(server.Start(GLAM_BIN, dir / "data")) << server.error();
+  auto client = ClientFor(server);
+  auto res = client.Get("/api/v1/uploads/" + upload_id);
+  ASSERT_TRUE(res);
+  ASSERT_EQ(res->status, 200) << "upload lost after kill -9: " << res->body;
+  ASSERT_EQ(json::parse(res->body)["offset"], half);
+  res = client.Patch("/api/v1/uploads/" + upload_id, {{"Upload-Offset", std::to_string(half)}}, video.substr(half),
+                     "application/offset+octet-stream");
+  ASSERT_TRUE(res);
+  ASSERT_EQ(res->status, 200) << res->body;
+  EXPECT_EQ(json::parse(res->body)["complete"], true);
+  res = client.Post("/api/v1/jobs", json{{"upload_id", upload_id}, {"options", json::parse(kOptions)}}.dump(),
+                    "application/json");
+  ASSERT_TRUE(res);
+  ASSERT_EQ(res->status, 201) << res->body;
+  const std::string id = json::parse(res->body)["id"];
+  EXPECT_EQ(FollowToEnd(client, id), "completed") << GetJob(client, id).dump();
+  const json job = GetJob(client, id);
+  EXPECT_EQ(job["input"]["size_bytes"], video.size());
+  EXPECT_GT(job["progress"]["points"].get<int>(), 0);
   server.Signal(SIGTERM);
   EXPECT_EQ(server.Wait(30), 0);
 }
