@@ -23,6 +23,7 @@
 #include "engine/core/logging.h"
 #include "engine/pipeline/mapping_job.h"
 #include "engine/video/frame_source.h"
+#include "server/cli_progress.h"
 #include "server/commands.h"
 
 namespace glam::cli {
@@ -72,32 +73,6 @@ extern "C" void OnInterrupt(int) {
     return;
   }
   InterruptToken().Cancel();
-}
-
-std::string FormatDuration(double seconds) {
-  if (seconds < 0) return "--:--";
-  const long s = static_cast<long>(seconds + 0.5);
-  return s >= 3600 ? fmt::format("{}:{:02}:{:02}", s / 3600, (s / 60) % 60, s % 60)
-                   : fmt::format("{:02}:{:02}", s / 60, s % 60);
-}
-
-void DrawProgress(const MappingProgress& p, bool tty) {
-  const std::string counts = p.frames_total > 0 ? fmt::format("{}/{}", p.frames_done, p.frames_total)
-                                                 : fmt::format("{}", p.frames_done);
-  const std::string tail = fmt::format("{} frames  {:.1f} fps  ETA {}  submaps {}  keyframes {}",
-                                       counts, p.fps, FormatDuration(p.eta_s), p.submaps_completed,
-                                       p.keyframes);
-  if (!tty) {
-    GLAM_LOG_INFO("{}: {}", p.stage, tail);
-    return;
-  }
-  constexpr int kWidth = 30;
-  const double fraction =
-      p.frames_total > 0 ? std::min(1.0, static_cast<double>(p.frames_done) / p.frames_total) : 0;
-  const int filled = static_cast<int>(fraction * kWidth);
-  std::cerr << fmt::format("\r\033[K{:<8} [{}{}] {:3.0f}%  {}", p.stage, std::string(filled, '#'),
-                           std::string(kWidth - filled, '.'), 100 * fraction, tail)
-            << std::flush;
 }
 
 void RunMap(MapArgs& args) {

@@ -12,5 +12,6 @@ void RegisterSynthCommand(CLI::App& app);
 void RegisterMapCommand(CLI::App& app);
 void RegisterVocabCommand(CLI::App& app);
 void RegisterServeCommand(CLI::App& app);
+void RegisterUploadCommand(CLI::App& app);
 
 }  // namespace glam::cli

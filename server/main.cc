@@ -44,6 +44,7 @@ int main(int argc, char** argv) {
   glam::cli::RegisterMapCommand(app);
   glam::cli::RegisterVocabCommand(app);
   glam::cli::RegisterServeCommand(app);
+  glam::cli::RegisterUploadCommand(app);
 
   try {
     app.parse(argc, argv);

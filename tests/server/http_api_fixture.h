@@ -3,6 +3,11 @@
 // Include after any Eigen header (httplib.h, see server_test_util.h).
 #pragma once
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
 #include <chrono>
 #include <filesystem>
 #include <memory>
@@ -141,6 +146,26 @@ inline void ExpectError(const httplib::Result& res, int status, const std::strin
     EXPECT_EQ(body["error"]["code"], code) << what;
   }
   EXPECT_FALSE(body["error"]["message"].get<std::string>().empty()) << what;
+}
+
+// Starts a PATCH of upload `id` on 127.0.0.1:`port` that declares `declared` body bytes but
+// sends only `sent`, and returns the open socket: closing it is a link that dropped mid-body;
+// keeping it open holds the request (and its upload slot) in the server.
+inline int StartPatch(int port, const std::string& id, std::int64_t offset, const std::string& sent,
+                      std::size_t declared) {
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  EXPECT_GE(fd, 0);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_port = htons(static_cast<std::uint16_t>(port));
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  EXPECT_EQ(::connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
+  const std::string request = "PATCH /api/v1/uploads/" + id + " HTTP/1.1\r\nHost: 127.0.0.1\r\n" +
+                              "Content-Type: application/offset+octet-stream\r\nUpload-Offset: " +
+                              std::to_string(offset) + "\r\nContent-Length: " + std::to_string(declared) +
+                              "\r\n\r\n" + sent;
+  EXPECT_EQ(::send(fd, request.data(), request.size(), 0), static_cast<ssize_t>(request.size()));
+  return fd;
 }
 
 }  // namespace glam::server

@@ -2,9 +2,6 @@
 // sent in chunks becomes a job with exactly its bytes; a PATCH whose connection breaks keeps
 // what arrived, and so does a server restart; every refusal is a documented JSON error that
 // leaves the upload usable.
-#include <arpa/inet.h>
-#include <netinet/in.h>
-#include <sys/socket.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -67,24 +64,6 @@ class ResumableUploadTest : public HttpApiTest {
   httplib::Result CreateJobFrom(httplib::Client& client, const json& request) {
     return client.Post("/api/v1/jobs", request.dump(), "application/json");
   }
-
-  // Sends a PATCH whose body stops after `sent` of `declared` bytes and closes the connection,
-  // as a dropped mobile link does.
-  void SendBrokenPatch(const std::string& id, std::int64_t offset, const std::string& sent, std::size_t declared) {
-    const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-    ASSERT_GE(fd, 0);
-    sockaddr_in addr{};
-    addr.sin_family = AF_INET;
-    addr.sin_port = htons(static_cast<std::uint16_t>(port_));
-    addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    ASSERT_EQ(::connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
-    const std::string request = "PATCH /api/v1/uploads/" + id + " HTTP/1.1\r\nHost: 127.0.0.1\r\n" +
-                                "Content-Type: application/offset+octet-stream\r\nUpload-Offset: " +
-                                std::to_string(offset) + "\r\nContent-Length: " + std::to_string(declared) +
-                                "\r\n\r\n" + sent;
-    ASSERT_EQ(::send(fd, request.data(), request.size(), 0), static_cast<ssize_t>(request.size()));
-    ::close(fd);
-  }
 };
 
 TEST_F(ResumableUploadTest, AVideoSentInChunksBecomesAJobWithExactlyItsBytes) {
@@ -128,7 +107,7 @@ TEST_F(ResumableUploadTest, ABrokenConnectionAndARestartKeepTheBytesThatArrived)
   const std::string id = Open(client, static_cast<std::int64_t>(video.size()), "clip.avi");
   SendFrom(client, id, video.substr(0, 1000), 0, 1000);
   // 700 of 2000 bytes arrive, then the link drops.
-  SendBrokenPatch(id, 1000, video.substr(1000, 700), 2000);
+  ::close(StartPatch(port_, id, 1000, video.substr(1000, 700), 2000));
   // Until the server has seen the connection end, a PATCH is refused as busy (never
   // interleaved); then as an offset mismatch (offset 0 is wrong either way).
   std::int64_t offset = -1;

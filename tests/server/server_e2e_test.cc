@@ -5,6 +5,7 @@
 // restart), SIGTERM exits 0 leaving the job resumable, and a live-stream job mapping what an
 // ffmpeg sender pushes until it is finished over REST.
 #include <signal.h>
+#include <cstdlib>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -364,6 +365,41 @@ TEST(ServerE2E, KilledServerKeepsAResumableUpload) {
   const json job = GetJob(client, id);
   EXPECT_EQ(job["input"]["size_bytes"], video.size());
   EXPECT_GT(job["progress"]["points"].get<int>(), 0);
+  server.Signal(SIGTERM);
+  EXPECT_EQ(server.Wait(30), 0);
+}
+
+// `glam upload` as a user runs it: the clip (with its GPS track found beside it) in small
+// chunks, the job followed to the end, the results downloaded; a bad option exits 2 before
+// anything is sent.
+TEST(ServerE2E, GlamUploadSendsFollowsAndDownloads) {
+  const fs::path dir = glam::testing::FreshTempDir("e2e_glam_upload");
+  ServerProcess server;
+  ASSERT_TRUE(server.Start(GLAM_BIN, dir / "data", {"--token", "t0ken"})) << server.error();
+  fs::copy_file(kClip / "video.mp4", dir / "DJI_0007.MP4");
+  const std::string url = "http://127.0.0.1:" + std::to_string(server.port());
+  const std::string base = std::string(GLAM_BIN) + " --log-level warn upload " + (dir / "DJI_0007.MP4").string() +
+                           " --server " + url;
+  auto run = [&](const std::string& extra) {
+    const int status = std::system((base + " " + extra + " > " + (dir / "out.txt").string() + " 2> " +
+                                    (dir / "err.txt").string())
+                                       .c_str());
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  };
+  EXPECT_EQ(run("--token t0ken --options '{\"stride\": 0}'"), 2) << glam::testing::ReadFile(dir / "err.txt");
+  EXPECT_EQ(run("--token wrong"), 2) << glam::testing::ReadFile(dir / "err.txt");  // 401: refused
+  ASSERT_EQ(run("--token t0ken --no-gps --chunk-mb 0.05 --options '" + std::string(kOptions) +
+                "' --follow --download " + (dir / "results").string()),
+            0)
+      << glam::testing::ReadFile(dir / "err.txt");
+  const json created = json::parse(glam::testing::ReadFile(dir / "out.txt"));
+  EXPECT_EQ(created["name"], "tiny");
+  EXPECT_EQ(created["input"]["filename"], "DJI_0007.MP4");
+  for (const char* name : {"trajectory.tum", "points.ply", "report.json", "graph.json", "map.glb"}) {
+    EXPECT_TRUE(fs::is_regular_file(dir / "results" / name)) << name;
+  }
+  const json report = json::parse(glam::testing::ReadFile(dir / "results" / "report.json"));
+  EXPECT_GT(report["frames_posed"].get<int>(), 0);
   server.Signal(SIGTERM);
   EXPECT_EQ(server.Wait(30), 0);
 }

@@ -1,0 +1,190 @@
+// `glam upload VIDEO`: sends a video (and its DJI .SRT GPS track, found next to it as `glam
+// map` finds it) to a GLAM server as resumable uploads, creates the job, and with --follow
+// shows its progress until it ends; --download DIR then fetches the results. Exit codes (as
+// every glam command, server/main.cc): 0 job created (or, when followed, completed), 2 bad
+// input or a request the server refused (4xx), 3 server unreachable or failing, or the
+// followed job failed or was canceled.
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <string>
+#include <thread>
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "api/job_json.h"
+#include "engine/core/error.h"
+#include "engine/core/logging.h"
+#include "engine/geo/gps_track.h"
+#include "server/cli_progress.h"
+#include "server/commands.h"
+#include "server/upload_client.h"
+
+namespace glam::cli {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+struct UploadArgs {
+  std::string video;
+  std::string gps_path;
+  bool no_gps = false;
+  std::string name;
+  std::string options_json;
+  std::string upload_id;
+  double chunk_mb = 16;
+  bool follow = false;
+  std::string download_dir;
+  double poll_s = 1.0;
+  UploadClientOptions client;
+};
+
+// The results a completed job offers, as `glam map` writes them.
+constexpr const char* kResults[] = {"trajectory.tum", "points.ply", "report.json", "graph.json", "map.glb"};
+
+std::string SendFile(UploadClient& client, const fs::path& file, const std::string& upload_id, bool tty) {
+  const auto start = std::chrono::steady_clock::now();
+  std::int64_t first_offset = -1;
+  const std::string label = file.filename().string();
+  const std::string id = client.UploadFile(file, upload_id, [&](const UploadProgress& p) {
+    if (first_offset < 0) first_offset = p.offset;  // bytes the server had before this run
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double rate = s > 0 ? static_cast<double>(p.offset - first_offset) / s : 0;
+    DrawUploadProgress(label, p.offset, p.size, rate, p.retry, tty);
+  });
+  if (tty) std::cerr << "\n";
+  return id;
+}
+
+// Polls the job until it ends; returns its final JSON.
+json Follow(UploadClient& client, const std::string& job_id, double poll_s, bool tty) {
+  std::int64_t last_frames = -1;
+  while (true) {
+    json job = client.GetJob(job_id);
+    const std::string state = job.value("state", "");
+    if (job.contains("progress")) {
+      const MappingProgress p = api::ProgressFromJson(job["progress"]);
+      if (tty || p.frames_done != last_frames) DrawProgress(p, tty);
+      last_frames = p.frames_done;
+    }
+    if (state == "completed" || state == "failed" || state == "canceled") {
+      if (tty) std::cerr << "\n";
+      return job;
+    }
+    std::this_thread::sleep_for(std::chrono::duration<double>(poll_s));
+  }
+}
+
+void RunUpload(UploadArgs& args) {
+  if (args.client.token.empty()) {
+    if (const char* env = std::getenv("GLAM_API_TOKEN")) args.client.token = env;
+  }
+  if (!(args.chunk_mb >= 0.001 && args.chunk_mb <= 4096)) {
+    throw InputError(fmt::format("--chunk-mb must be in 0.001..4096, got {}", args.chunk_mb));
+  }
+  if (!(args.poll_s >= 0.05 && args.poll_s <= 60)) throw InputError("--poll must be in 0.05..60 seconds");
+  args.client.chunk_bytes = static_cast<std::int64_t>(args.chunk_mb * (1 << 20));
+  const fs::path video = args.video;
+  if (!fs::is_regular_file(video)) throw InputError(fmt::format("{} is not a file", video.string()));
+  json options = json::object();
+  if (!args.options_json.empty()) {
+    options = json::parse(args.options_json, nullptr, /*allow_exceptions=*/false);
+    if (!options.is_object()) throw InputError("--options must be a JSON object (the job options of docs/api.md)");
+  }
+  if (!args.name.empty()) options["name"] = args.name;
+  api::ParseJobOptions(options);  // refused here rather than after the upload
+  std::optional<fs::path> track;
+  if (!args.gps_path.empty()) {
+    track = fs::path(args.gps_path);
+  } else if (!args.no_gps) {
+    track = FindGpsSidecar(video);
+  }
+  if (track) {
+    try {
+      ReadGpsTrack(*track);  // a track without positions is refused before the upload
+    } catch (const InputError& e) {
+      throw InputError(fmt::format("GPS track {}: {} (--no-gps to upload without it)", track->string(), e.what()));
+    }
+  }
+  if (!args.download_dir.empty()) {
+    args.follow = true;
+    fs::create_directories(args.download_dir);
+  }
+
+  const bool tty = isatty(STDERR_FILENO) != 0;
+  UploadClient client(args.client);
+  const std::string upload_id = SendFile(client, video, args.upload_id, tty);
+  std::string track_id;
+  if (track) {
+    GLAM_LOG_INFO("sending the GPS track {}", track->string());
+    track_id = SendFile(client, *track, "", tty);
+  }
+  const json job = client.CreateJob(upload_id, track_id, options);
+  const std::string job_id = job.at("id").get<std::string>();
+  GLAM_LOG_INFO("job {} created ({}); viewer: {}", job_id, job.value("state", ""), client.UrlOf("/?job=" + job_id));
+  std::cout << job.dump() << std::endl;
+  if (!args.follow) return;
+
+  const json done = Follow(client, job_id, args.poll_s, tty);
+  const std::string state = done.value("state", "");
+  if (state != "completed") {
+    throw EnvironmentError(fmt::format("job {} {}: {}", job_id, state,
+                                       done.contains("error") && done["error"].is_string()
+                                           ? done["error"].get<std::string>()
+                                           : std::string("no error given")));
+  }
+  std::cerr << fmt::format("glam upload: job {} completed: {} points; viewer {}\n", job_id,
+                           done["progress"].value("points", 0), client.UrlOf("/?job=" + job_id));
+  if (!args.download_dir.empty()) {
+    for (const char* name : kResults) {
+      client.Download(job_id, name, fs::path(args.download_dir) / name);
+    }
+    std::cerr << fmt::format("glam upload: results in {}\n", args.download_dir);
+  }
+}
+
+}  // namespace
+
+void RegisterUploadCommand(CLI::App& app) {
+  auto args = std::make_shared<UploadArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "upload",
+      "Send a video to a GLAM server as a resumable upload (a dropped link costs a retry, not the file), create "
+      "the job, and optionally follow it and download the results");
+  cmd->add_option("video", args->video, "Video file")->required();
+  cmd->add_option("--server", args->client.server, "Server URL (env GLAM_SERVER)")
+      ->envname("GLAM_SERVER")
+      ->capture_default_str();
+  cmd->add_option("--token", args->client.token, "API token (env GLAM_API_TOKEN)");
+  cmd->add_option("--gps", args->gps_path,
+                  "GPS track sent with the video (default: the DJI .SRT beside it, as glam map finds it)");
+  cmd->add_flag("--no-gps", args->no_gps, "Do not send a GPS track")->excludes("--gps");
+  cmd->add_option("--name", args->name, "Job name (default: the file name)");
+  cmd->add_option("--options", args->options_json,
+                  "Job options as JSON, e.g. '{\"stride\": 2, \"focal\": 1450}' (docs/api.md)");
+  cmd->add_option("--upload-id", args->upload_id,
+                  "Continue this upload (from the bytes the server has) instead of opening a new one");
+  cmd->add_option("--chunk-mb", args->chunk_mb, "Bytes per request (MiB)")->capture_default_str();
+  cmd->add_option("--retries", args->client.max_attempts, "Tries per chunk before giving up")->capture_default_str();
+  cmd->add_flag("--follow", args->follow, "Show the job's progress until it ends (exit 3 unless it completes)");
+  cmd->add_option("--download", args->download_dir,
+                  "With --follow: write trajectory.tum, points.ply, report.json, graph.json and map.glb here");
+  cmd->add_option("--poll", args->poll_s, "Seconds between progress requests with --follow")->capture_default_str();
+  cmd->callback([args] {
+    try {
+      RunUpload(*args);
+    } catch (const ServerError& e) {
+      // A refusal is the user's to fix (exit 2); a failing server is not (exit 3).
+      if (e.status() >= 400 && e.status() < 500) throw InputError(e.what());
+      throw EnvironmentError(e.what());
+    }
+  });
+}
+
+}  // namespace glam::cli

@@ -1,0 +1,94 @@
+// The client side of a GLAM server's REST API, for `glam upload` (server/cli_upload.cc): sends
+// a video (and its GPS track) as resumable uploads (docs/api.md, "Resumable uploads"), makes a
+// job of them, follows it and downloads its results.
+//
+// Why a client in the server's binary: a field team uploads multi-GB videos over mobile links
+// from the laptop that also runs `glam map` offline; curl cannot resume by itself. A chunk that
+// fails (connection lost, timeout, server restarting, 5xx, 503 limits) is retried with
+// exponential backoff after asking the server for its offset, so the bytes it already has are
+// never sent twice; a request the server refuses (other 4xx) is not retried.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+namespace httplib {
+class Client;
+}
+
+namespace glam::cli {
+
+struct UploadClientOptions {
+  // http(s)://host[:port][/path prefix] of the server (the prefix when it sits behind a proxy).
+  std::string server = "http://127.0.0.1:8080";
+  std::string token;  // Bearer token; empty = none
+  std::int64_t chunk_bytes = 16LL << 20;
+  // Consecutive failures of one chunk before giving up (the upload stays on the server).
+  int max_attempts = 8;
+  std::chrono::milliseconds first_backoff{1000};  // doubled after every failure ...
+  std::chrono::milliseconds max_backoff{30000};   // ... up to this
+  std::chrono::seconds request_timeout{300};      // per socket read / write
+
+  void Check() const;  // throws InputError
+};
+
+struct UploadProgress {
+  std::int64_t offset = 0;  // bytes the server has (plus those of the chunk in flight)
+  std::int64_t size = 0;
+  std::string retry;  // why the last chunk is being retried; empty while all goes well
+};
+
+// A failure the server reported: its HTTP status and error code (api::ApiError on the wire).
+class ServerError : public std::runtime_error {
+ public:
+  ServerError(int status, std::string code, const std::string& message)
+      : std::runtime_error(message), status_(status), code_(std::move(code)) {}
+  int status() const { return status_; }
+  const std::string& code() const { return code_; }
+
+ private:
+  int status_;
+  std::string code_;
+};
+
+class UploadClient {
+ public:
+  explicit UploadClient(UploadClientOptions options);  // throws InputError for a bad server URL
+  ~UploadClient();
+  UploadClient(const UploadClient&) = delete;
+  UploadClient& operator=(const UploadClient&) = delete;
+
+  // Sends `file` as a resumable upload and returns its id; continues `upload_id` (from the
+  // offset the server has) when given. `progress` is called after every chunk and retry.
+  // Throws ServerError for a refusal, EnvironmentError when the server stayed unreachable for
+  // max_attempts tries (the message names the upload id to continue with).
+  std::string UploadFile(const std::filesystem::path& file, const std::string& upload_id,
+                         const std::function<void(const UploadProgress&)>& progress);
+
+  // POST /jobs {"upload_id", "telemetry_upload_id" (if not empty), "options"}: the job JSON.
+  nlohmann::json CreateJob(const std::string& upload_id, const std::string& telemetry_upload_id,
+                           const nlohmann::json& options);
+  nlohmann::json GetJob(const std::string& job_id);
+  // GET /jobs/{id}/{name} into `destination` (written to a temporary name, then renamed).
+  void Download(const std::string& job_id, const std::string& name, const std::filesystem::path& destination);
+
+  // The URL of `path` (e.g. "/?job=<id>", the viewer) on the server.
+  std::string UrlOf(const std::string& path) const;
+
+ private:
+  nlohmann::json GetUpload(const std::string& upload_id);
+  std::string OpenUpload(std::int64_t size, const std::string& filename);
+
+  UploadClientOptions options_;
+  std::string origin_;  // scheme://host:port
+  std::string prefix_;  // path prefix without a trailing '/'
+  std::unique_ptr<httplib::Client> http_;
+};
+
+}  // namespace glam::cli
