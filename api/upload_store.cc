@@ -225,8 +225,7 @@ UploadStore::Appender UploadStore::Append(const std::string& id, std::int64_t of
   return Appender(this, s, file);
 }
 
-UploadSession UploadStore::Take(const std::string& id, const fs::path& destination) {
-  std::lock_guard lock(mutex_);
+UploadSession UploadStore::LoadCompleteLocked(const std::string& id) const {
   const UploadSession s = LoadLocked(id);
   if (busy_.count(id)) {
     throw ApiError(409, "upload_busy", fmt::format("another request is sending bytes of upload {}", id));
@@ -235,6 +234,12 @@ UploadSession UploadStore::Take(const std::string& id, const fs::path& destinati
     throw ApiError(409, "upload_incomplete",
                    fmt::format("upload {} has {} of its {} bytes; send the rest first", id, s.offset, s.size));
   }
+  return s;
+}
+
+UploadSession UploadStore::Take(const std::string& id, const fs::path& destination) {
+  std::lock_guard lock(mutex_);
+  const UploadSession s = LoadCompleteLocked(id);
   std::error_code ec;
   fs::rename(DataPath(id), destination, ec);
   if (ec) throw EnvironmentError(fmt::format("cannot move upload {}: {}", id, ec.message()));
@@ -245,14 +250,7 @@ UploadSession UploadStore::Take(const std::string& id, const fs::path& destinati
 
 fs::path UploadStore::CompleteDataFile(const std::string& id) const {
   std::lock_guard lock(mutex_);
-  const UploadSession s = LoadLocked(id);
-  if (busy_.count(id)) {
-    throw ApiError(409, "upload_busy", fmt::format("another request is sending bytes of upload {}", id));
-  }
-  if (!s.complete()) {
-    throw ApiError(409, "upload_incomplete",
-                   fmt::format("upload {} has {} of its {} bytes; send the rest first", id, s.offset, s.size));
-  }
+  LoadCompleteLocked(id);
   return DataPath(id);
 }
 

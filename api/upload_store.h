@@ -131,8 +131,10 @@ class UploadStore {
  private:
   std::filesystem::path MetaPath(const std::string& id) const;
   std::filesystem::path DataPath(const std::string& id) const;
-  // Reads a session from disk; nullopt-like: throws 404 when missing. Under mutex_.
+  // Reads a session from disk (400 for a malformed id, 404 when missing). Under mutex_.
   UploadSession LoadLocked(const std::string& id) const;
+  // As LoadLocked, and 409 unless no Appender holds it and every byte arrived.
+  UploadSession LoadCompleteLocked(const std::string& id) const;
   std::vector<UploadSession> ListLocked() const;
   void Release(const std::string& id);
 

@@ -179,7 +179,7 @@ void RegisterUploadCommand(CLI::App& app) {
   cmd->callback([args] {
     try {
       RunUpload(*args);
-    } catch (const ServerError& e) {
+    } catch (const api::ApiError& e) {
       // A refusal is the user's to fix (exit 2); a failing server is not (exit 3).
       if (e.status() >= 400 && e.status() < 500) throw InputError(e.what());
       throw EnvironmentError(e.what());

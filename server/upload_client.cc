@@ -19,18 +19,18 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 // The server's JSON error, or the status line when the body is not one.
-ServerError ErrorOf(const httplib::Result& res, const std::string& what) {
+api::ApiError ErrorOf(const httplib::Result& res, const std::string& what) {
   const json body = json::parse(res->body, nullptr, /*allow_exceptions=*/false);
   if (body.is_object() && body.contains("error") && body["error"].is_object()) {
     const std::string code = body["error"].value("code", "error");
-    return ServerError(res->status, code,
+    return api::ApiError(res->status, code,
                        fmt::format("{}: {} ({} {})", what, body["error"].value("message", ""), res->status, code));
   }
-  return ServerError(res->status, "error", fmt::format("{}: HTTP {}", what, res->status));
+  return api::ApiError(res->status, "error", fmt::format("{}: HTTP {}", what, res->status));
 }
 
 // Answers worth retrying: the request may succeed later as it is.
-bool Transient(const ServerError& e) {
+bool Transient(const api::ApiError& e) {
   return e.status() >= 500 || e.status() == 408 || e.status() == 429 || e.code() == "upload_busy" ||
          e.code() == "offset_mismatch";
 }
@@ -136,7 +136,7 @@ std::string UploadClient::UploadFile(const fs::path& file, const std::string& up
       state = {offset, size, ""};
       if (progress) progress(state);
       continue;
-    } catch (const ServerError& e) {
+    } catch (const api::ApiError& e) {
       if (!Transient(e)) throw;
       failure = e.what();
     } catch (const EnvironmentError& e) {
@@ -154,7 +154,7 @@ std::string UploadClient::UploadFile(const fs::path& file, const std::string& up
     backoff = std::min(options_.max_backoff, backoff * 2);
     try {
       offset = GetUpload(id).at("offset").get<std::int64_t>();  // what arrived of the failed chunk stays
-    } catch (const ServerError& e) {
+    } catch (const api::ApiError& e) {
       if (!Transient(e)) throw;  // gone (expired, deleted)
     } catch (const EnvironmentError&) {
       // Still unreachable: the next PATCH tries again from the last known offset.

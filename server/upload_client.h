@@ -6,7 +6,8 @@
 // from the laptop that also runs `glam map` offline; curl cannot resume by itself. A chunk that
 // fails (connection lost, timeout, server restarting, 5xx, 503 limits) is retried with
 // exponential backoff after asking the server for its offset, so the bytes it already has are
-// never sent twice; a request the server refuses (other 4xx) is not retried.
+// never sent twice; a request the server refuses (other 4xx) is not retried. The server's
+// errors arrive as api::ApiError, the type it threw them as.
 #pragma once
 
 #include <chrono>
@@ -17,6 +18,8 @@
 #include <string>
 
 #include <nlohmann/json.hpp>
+
+#include "api/api_error.h"
 
 namespace httplib {
 class Client;
@@ -44,19 +47,6 @@ struct UploadProgress {
   std::string retry;  // why the last chunk is being retried; empty while all goes well
 };
 
-// A failure the server reported: its HTTP status and error code (api::ApiError on the wire).
-class ServerError : public std::runtime_error {
- public:
-  ServerError(int status, std::string code, const std::string& message)
-      : std::runtime_error(message), status_(status), code_(std::move(code)) {}
-  int status() const { return status_; }
-  const std::string& code() const { return code_; }
-
- private:
-  int status_;
-  std::string code_;
-};
-
 class UploadClient {
  public:
   explicit UploadClient(UploadClientOptions options);  // throws InputError for a bad server URL
@@ -66,7 +56,8 @@ class UploadClient {
 
   // Sends `file` as a resumable upload and returns its id; continues `upload_id` (from the
   // offset the server has) when given. `progress` is called after every chunk and retry.
-  // Throws ServerError for a refusal, EnvironmentError when the server stayed unreachable for
+  // Throws api::ApiError (the server's status and error code) for a refusal, EnvironmentError
+  // when the server stayed unreachable or failing for
   // max_attempts tries (the message names the upload id to continue with).
   std::string UploadFile(const std::filesystem::path& file, const std::string& upload_id,
                          const std::function<void(const UploadProgress&)>& progress);

@@ -1,6 +1,7 @@
 // The service's state machine and durability with a fake engine (no video, no HTTP): the
 // executor emits progress like RunMapping does and can be held mid-run by the test.
 #include "api/job_service.h"
+#include "tests/api/api_error_test_util.h"
 
 #include <atomic>
 #include <chrono>
@@ -24,6 +25,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
+using testing::StatusOf;
 
 fs::path FreshDir(const std::string& name) { return glam::testing::FreshTempDir("api_service_" + name); }
 
@@ -108,15 +110,6 @@ void WaitFor(const std::function<bool()>& condition) {
   const auto deadline = std::chrono::steady_clock::now() + 10s;
   while (!condition() && std::chrono::steady_clock::now() < deadline) std::this_thread::sleep_for(2ms);
   ASSERT_TRUE(condition());
-}
-
-int StatusOf(const std::function<void()>& call) {
-  try {
-    call();
-  } catch (const ApiError& e) {
-    return e.status();
-  }
-  return 0;
 }
 
 TEST(JobService, RunsAJobToCompletionWithOrderedEvents) {

@@ -12,6 +12,7 @@
 
 #include "api/api_error.h"
 #include "engine/core/error.h"
+#include "tests/api/api_error_test_util.h"
 #include "tests/support/temp_dir.h"
 
 namespace glam::api {
@@ -19,24 +20,8 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
-
-int StatusOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const ApiError& e) {
-    return e.status();
-  }
-  return 0;
-}
-
-std::string CodeOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const ApiError& e) {
-    return e.code();
-  }
-  return "";
-}
+using testing::CodeOf;
+using testing::StatusOf;
 
 std::string ReadAll(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);

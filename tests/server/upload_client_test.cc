@@ -18,7 +18,7 @@
 namespace glam::server {
 namespace {
 
-using cli::ServerError;
+using api::ApiError;
 using cli::UploadClient;
 using cli::UploadClientOptions;
 using cli::UploadProgress;
@@ -65,7 +65,7 @@ TEST_F(UploadClientTest, AFileInChunksBecomesAJobWhoseResultsDownload) {
   try {
     client.Download(job["id"], "parts/1/points.ply", dir_ / "part.ply");
     ADD_FAILURE() << "no part 1, yet downloaded";
-  } catch (const ServerError& e) {
+  } catch (const ApiError& e) {
     EXPECT_EQ(e.status(), 404);
     EXPECT_EQ(e.code(), "not_found");
   }
@@ -129,7 +129,7 @@ TEST_F(UploadClientTest, AnUploadIsContinuedFromTheBytesTheServerHas) {
   }
   // Another file under that id: refused before a byte is sent.
   std::ofstream(dir_ / "other.mp4") << "short";
-  EXPECT_THROW(client.UploadFile(dir_ / "other.mp4", id, {}), ServerError);  // consumed by the job: 404
+  EXPECT_THROW(client.UploadFile(dir_ / "other.mp4", id, {}), ApiError);  // consumed by the job: 404
 }
 
 TEST_F(UploadClientTest, RefusalsAreNotRetriedAndAnUnreachableServerIsAnEnvironmentError) {
@@ -141,7 +141,7 @@ TEST_F(UploadClientTest, RefusalsAreNotRetriedAndAnUnreachableServerIsAnEnvironm
   try {
     client.UploadFile(big, "", [&](const UploadProgress&) { ++calls; });
     ADD_FAILURE() << "a file over the limit was accepted";
-  } catch (const ServerError& e) {
+  } catch (const ApiError& e) {
     EXPECT_EQ(e.status(), 413);
     EXPECT_EQ(e.code(), "payload_too_large");
   }
@@ -149,7 +149,7 @@ TEST_F(UploadClientTest, RefusalsAreNotRetriedAndAnUnreachableServerIsAnEnvironm
   try {
     client.CreateJob("0123456789abcdef", "", json::object());
     ADD_FAILURE() << "a job from an unknown upload";
-  } catch (const ServerError& e) {
+  } catch (const ApiError& e) {
     EXPECT_EQ(e.status(), 404);
   }
   EXPECT_THROW(client.UploadFile(dir_ / "missing.mp4", "", {}), InputError);
