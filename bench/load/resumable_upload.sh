@@ -1,0 +1,75 @@
+#!/usr/bin/env bash
+# Upload throughput of `glam serve` (not a test): a one-shot multipart upload with curl against
+# resumable uploads with `glam upload` at two chunk sizes, and an upload cut halfway (the
+# client killed) and continued with --upload-id. The file is random bytes, so every run ends
+# with the server's 422 (not a video) after the last byte: what is timed is the transfer, the
+# per-chunk fsync and the hand-off, on loopback (no network limit).
+#
+# usage: bench/load/resumable_upload.sh [BUILD_DIR] [SIZE_MB]   (defaults: build, 1000)
+set -euo pipefail
+here="$(cd "$(dirname "$0")" && pwd)"
+root="$(cd "$here/../.." && pwd)"
+build="${1:-$root/build}"
+size_mb="${2:-1000}"
+glam="$build/server/glam"
+[[ -x "$glam" ]] || { echo "missing $glam (build target glam)" >&2; exit 2; }
+
+work="$(mktemp -d /tmp/glam_upload_bench.XXXXXX)"
+server_pid=""
+cleanup() {
+  if [[ -n "$server_pid" ]]; then kill "$server_pid" 2>/dev/null || true; wait "$server_pid" 2>/dev/null || true; fi
+  rm -rf "$work"
+}
+trap cleanup EXIT
+
+head -c "$((size_mb * 1000000))" /dev/urandom > "$work/flight.bin"
+"$glam" --log-level warn serve --data "$work/data" --port 0 > "$work/stdout" &
+server_pid=$!
+for _ in $(seq 100); do
+  grep -q '"port"' "$work/stdout" 2>/dev/null && break
+  sleep 0.1
+done
+port="$(sed -n 's/.*"port": \([0-9]*\).*/\1/p' "$work/stdout" | head -1)"
+[[ -n "$port" ]] || { echo "server did not start" >&2; exit 1; }
+url="http://127.0.0.1:$port"
+echo "file: $size_mb MB of random bytes, $(nproc) cores, loopback"
+
+now() { date +%s.%N; }
+rate() { echo "scale=1; $size_mb / ($2 - $1)" | bc; }
+report() { printf "%-40s %6.2f s  %6s MB/s\n" "$1" "$(echo "$3 - $2" | bc)" "$(rate "$2" "$3")"; }
+
+t0=$(now)
+curl -s -o /dev/null -F "video=@$work/flight.bin" "$url/api/v1/jobs"
+report "multipart POST /jobs (curl)" "$t0" "$(now)"
+
+for chunk in 16 4; do
+  t0=$(now)
+  "$glam" --log-level error upload "$work/flight.bin" --server "$url" --no-gps --chunk-mb "$chunk" \
+    > /dev/null 2>&1 || true  # 422 at the end: random bytes are no video
+  report "glam upload, $chunk MiB chunks" "$t0" "$(now)"
+done
+
+# Cut halfway: the client is killed mid-transfer, then continued from the server's offset.
+t0=$(now)
+"$glam" --log-level info upload "$work/flight.bin" --server "$url" --no-gps > /dev/null 2> "$work/cut.log" &
+client=$!
+for _ in $(seq 600); do
+  id="$(sed -n 's/.*upload \([0-9a-f]\{16\}\) opened.*/\1/p' "$work/cut.log" | head -1)"
+  if [[ -n "$id" ]]; then
+    offset="$(curl -s "$url/api/v1/uploads/$id" | sed -n 's/.*"offset":\([0-9]*\).*/\1/p')"
+    [[ -n "$offset" && "$offset" -ge "$((size_mb * 500000))" ]] && break
+  fi
+  sleep 0.05
+done
+kill -9 "$client" 2>/dev/null || true
+wait "$client" 2>/dev/null || true
+kept="$(curl -s "$url/api/v1/uploads/$id" | sed -n 's/.*"offset":\([0-9]*\).*/\1/p')"
+"$glam" --log-level error upload "$work/flight.bin" --server "$url" --no-gps --upload-id "$id" \
+  > /dev/null 2>&1 || true
+report "cut at $((kept / 1000000)) MB, continued (--upload-id)" "$t0" "$(now)"
+left="$(ls "$work/data/resumable" | wc -l)"
+echo "files left in DIR/resumable: $left (0: every upload was handed over)"
+
+kill -TERM "$server_pid"
+wait "$server_pid" || true
+server_pid=""
