@@ -236,6 +236,44 @@ nlohmann::json ReadJsonObjectBody(httplib::Response& res, const httplib::Content
   return j;
 }
 
+// A job from a complete resumable upload ({"upload_id"}) and optionally its GPS track
+// ({"telemetry_upload_id"}), both consumed.
+static api::Job CreateJobFromUploads(Context& ctx, const nlohmann::json& j, const api::JobOptions& options) {
+  const std::string upload_id = j["upload_id"].get<std::string>();
+  // Everything that can refuse the request is checked before the upload is consumed: a
+  // client told 503 or 400 still has its bytes on the server.
+  ctx.uploads.CompleteDataFile(upload_id);
+  std::string telemetry;
+  std::string telemetry_id;
+  if (j.contains("telemetry_upload_id")) {
+    telemetry_id = j["telemetry_upload_id"].get<std::string>();
+    if (telemetry_id == upload_id) throw ApiError(400, "bad_telemetry", "the telemetry is the video's own upload");
+    const fs::path file = ctx.uploads.CompleteDataFile(telemetry_id);
+    if (fs::file_size(file) > kMaxTelemetryBytes) {
+      throw ApiError(413, "payload_too_large",
+                     fmt::format("the telemetry upload is larger than {} MiB", kMaxTelemetryBytes >> 20));
+    }
+    std::ifstream in(file, std::ios::binary);
+    telemetry.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    try {
+      ParseDjiSrt(telemetry);
+    } catch (const InputError& e) {
+      throw ApiError(400, "bad_telemetry", fmt::format("telemetry: {}", e.what()));
+    }
+  }
+  ctx.service.CheckCanQueue();
+  const fs::path video = ctx.service.NewUploadPath();
+  const api::UploadSession session = ctx.uploads.Take(upload_id, video);
+  if (!telemetry_id.empty()) {
+    try {
+      ctx.uploads.Remove(telemetry_id);  // its text travels with the job
+    } catch (const std::exception& e) {
+      GLAM_LOG_WARN("telemetry upload {} not removed: {}", telemetry_id, e.what());
+    }
+  }
+  return ctx.service.CreateJob(video, session.filename, options, telemetry);
+}
+
 // POST /api/v1/jobs with a JSON body: {"stream_url": "...", "options": {...}} (a live stream)
 // or {"upload_id": "...", "telemetry_upload_id": "...", "options": {...}} (a video sent as a
 // resumable upload, api/upload_store.h, and optionally its DJI .SRT track as another one).
@@ -263,39 +301,7 @@ void HandleCreateJobFromJson(Context& ctx, httplib::Response& res, const httplib
   if (stream) {
     job = ctx.service.CreateStreamJob(j["stream_url"].get<std::string>(), options);
   } else {
-    const std::string upload_id = j["upload_id"].get<std::string>();
-    // Everything that can refuse the request is checked before the upload is consumed: a
-    // client told 503 or 400 still has its bytes on the server.
-    ctx.uploads.CompleteDataFile(upload_id);
-    std::string telemetry;
-    std::string telemetry_id;
-    if (j.contains("telemetry_upload_id")) {
-      telemetry_id = j["telemetry_upload_id"].get<std::string>();
-      if (telemetry_id == upload_id) throw ApiError(400, "bad_telemetry", "the telemetry is the video's own upload");
-      const fs::path file = ctx.uploads.CompleteDataFile(telemetry_id);
-      if (fs::file_size(file) > kMaxTelemetryBytes) {
-        throw ApiError(413, "payload_too_large",
-                       fmt::format("the telemetry upload is larger than {} MiB", kMaxTelemetryBytes >> 20));
-      }
-      std::ifstream in(file, std::ios::binary);
-      telemetry.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-      try {
-        ParseDjiSrt(telemetry);
-      } catch (const InputError& e) {
-        throw ApiError(400, "bad_telemetry", fmt::format("telemetry: {}", e.what()));
-      }
-    }
-    ctx.service.CheckCanQueue();
-    const fs::path video = ctx.service.NewUploadPath();
-    const api::UploadSession session = ctx.uploads.Take(upload_id, video);
-    if (!telemetry_id.empty()) {
-      try {
-        ctx.uploads.Remove(telemetry_id);  // its text travels with the job
-      } catch (const std::exception& e) {
-        GLAM_LOG_WARN("telemetry upload {} not removed: {}", telemetry_id, e.what());
-      }
-    }
-    job = ctx.service.CreateJob(video, session.filename, options, telemetry);
+    job = CreateJobFromUploads(ctx, j, options);
   }
   res.set_header("Location", "/api/v1/jobs/" + job.id);
   SendJson(res, 201, api::JobToJson(job));

@@ -36,13 +36,16 @@ bool OpenSubmapPreviewer::Update(const SubmapBuilder& builder) {
   }
   // Where the open submap will be placed from: the submap before it, once a revision placed
   // that (a fraction of a second after it completed), or its own levelling for the run's first.
+  // After a tracking loss (no frames shared with the submap before) only a GPS fit of its own
+  // can place it, in the east-north-up frame the georeferenced revisions already use.
   const std::uint32_t id = builder.next_submap_id();
+  const bool gps_placeable = id != 0 && georeferencer_ != nullptr && georeferencer_->fit().has_value();
   std::optional<std::uint32_t> anchor;
   if (previous_ && previous_->id + 1 == id) {
     if (!tiles_.placed(previous_->id)) return false;  // tried again on the next frame
     anchor = previous_->id;
-  } else if (id != 0) {
-    return false;  // after a tracking loss: no shared frames, placed by alignment once complete
+  } else if (id != 0 && !gps_placeable) {
+    return false;  // placed by alignment (or the revisions' GPS fits) once complete
   }
   std::optional<Submap> preview = builder.OpenSubmapPreview(static_cast<std::size_t>(options_.min_keyframes));
   if (!preview) return false;
@@ -52,14 +55,18 @@ bool OpenSubmapPreviewer::Update(const SubmapBuilder& builder) {
   std::optional<Eigen::Matrix4d> ecef_from_world;
   if (anchor) {
     const std::optional<Sim3> previous_from_open = EstimateFromSharedFrames(*previous_, *preview);
-    if (!previous_from_open) {
+    if (previous_from_open) {
+      anchor_from_open = *previous_from_open;
+    } else if (gps_placeable) {
+      anchor.reset();  // the submap before it was lost, not handed off from: placed by GPS below
+    } else {
       GLAM_LOG_DEBUG("open submap {}: no placement from the frames it shares with submap {}", id, *anchor);
       return false;
     }
-    anchor_from_open = *previous_from_open;
-  } else {
+  }
+  if (!anchor) {
     anchor_from_open = LevelSubmap(*preview, leveling_).world_from_submap;
-    if (georeferencer_ != nullptr && !georeferencer_->fit()) {
+    if (georeferencer_ != nullptr && (gps_placeable || !georeferencer_->fit())) {
       const std::optional<GeoreferenceResult> fit = georeferencer_->FitOpenSubmap(*preview, anchor_from_open);
       if (!fit) {
         GLAM_LOG_DEBUG("open submap {}: not previewed until the GPS track fits its {} posed frames", id,

@@ -13,7 +13,10 @@
 // (GeoreferenceWith) it is shown only once the track fits its posed frames, and in metres,
 // east-north-up with the fit, as the revisions after it will be: shown in the mapping frame
 // first, the map would jump to another scale and heading at the first georeferenced revision.
-// A submap started after a tracking loss shares no frames with the one before: it gets no
+// A submap started after a tracking loss shares no frames with the one before. With a GPS
+// track and a georeferenced map it is previewed where its own GPS fit puts it (levelled, then
+// fitted as the revisions place a disconnected part: the same east-north-up frame, whose
+// origin is the track's first fix), once its posed frames allow a fit; without, it gets no
 // preview until it completes and alignment has linked it (a preview in the wrong place is
 // worse than none).
 #pragma once
@@ -48,7 +51,8 @@ class OpenSubmapPreviewer {
   OpenSubmapPreviewer(const OpenSubmapPreviewOptions& options, const LevelingOptions& leveling, TileWriter& tiles);
 
   // The run's GPS fits (owned by the caller, used on the same thread as Update): the first
-  // submap's preview waits for a fit of its own while no revision has been georeferenced.
+  // submap's preview waits for a fit of its own while no revision has been georeferenced, and
+  // so does a submap started after a tracking loss once one has.
   void GeoreferenceWith(const LiveGeoreferencer* georeferencer) { georeferencer_ = georeferencer; }
 
   // The submap the next open one hands off from (also the last one of a resumed run).

@@ -314,6 +314,66 @@ TEST(GeoreferenceEndToEnd, APieceTheImagesCannotLinkIsPlacedInTheMapByGps) {
   EXPECT_EQ(j["parts"].size(), 0u);
 }
 
+// The live preview of the submap being built, after the cut: it shares no frames with the
+// submap before, so only its own GPS fit can place it; it is shown there (in the revisions'
+// east-north-up frame) while it is built, on the second piece's true ground.
+TEST(GeoreferenceEndToEnd, AfterACutTheSubmapBeingBuiltIsPreviewedWhereItsGpsPutsIt) {
+  const fs::path dir = glam::testing::FreshTempDir("georeference_pieces_preview");
+  const std::vector<TimedPose> truth = MakeTwoPieces(dir);
+  const std::int64_t cut = static_cast<std::int64_t>(ReadTumTrajectory(kClip / "gt_trajectory.tum").size());
+  const eval::HeightfieldSurface surface_b =
+      eval::HeightfieldSurface::Load(fs::path(GLAM_TEST_FIXTURES_DIR) / "lawnmower_seed4" / "gt_surface.json");
+  const Eigen::Vector3d shift = truth.front().world_from_cam.translation();  // ENU origin: the first fix
+  const Eigen::Vector3d b_offset(150, 80, 0);  // where MakeTwoPieces flew the second piece
+
+  MappingOptions options;
+  options.preview.interval_s = 0.2;
+  const fs::path out = dir / "out";
+  std::int64_t seen_previews = 0;
+  std::vector<double> median_errors;
+  const MappingReport report = RunMapping(dir / "two_pieces.mp4", out, options, [&](const MappingProgress& p) {
+    if (p.stage != "mapping" || p.previews == seen_previews) return;
+    seen_previews = p.previews;
+    const nlohmann::json tileset = nlohmann::json::parse(std::ifstream(out / "tileset.json"));
+    for (const nlohmann::json& child : tileset["root"]["children"]) {
+      if (!child["extras"].value("open", false) || child["extras"]["first_frame"].get<std::int64_t>() < cut) continue;
+      ASSERT_TRUE(tileset["root"].contains("transform")) << "a preview after the cut outside the ENU frame";
+      std::vector<double> errors;
+      for (const ColoredPoint& point : glam::testing::ChildTileWorldPoints(out, child)) {
+        errors.push_back(surface_b.Distance(point.position.cast<double>() + shift - b_offset).distance);
+      }
+      std::nth_element(errors.begin(), errors.begin() + static_cast<std::ptrdiff_t>(errors.size() / 2), errors.end());
+      median_errors.push_back(errors.empty() ? 1e9 : errors[errors.size() / 2]);
+    }
+  });
+  ASSERT_TRUE(report.georeference.ok) << report.georeference.reason;
+  for (std::size_t i = 0; i < median_errors.size(); ++i) {
+    std::cout << fmt::format("preview {} after the cut: median {:.2f} m from the second piece's true ground\n", i,
+                             median_errors[i]);
+  }
+  // The final map's tile of that submap, placed by the same kind of fit on the whole submap.
+  const nlohmann::json tileset = nlohmann::json::parse(std::ifstream(out / "tileset.json"));
+  std::optional<double> final_error;
+  for (const nlohmann::json& child : tileset["root"]["children"]) {
+    if (child["extras"]["first_frame"].get<std::int64_t>() != cut) continue;
+    std::vector<double> errors;
+    for (const ColoredPoint& point : glam::testing::ChildTileWorldPoints(out, child)) {
+      errors.push_back(surface_b.Distance(point.position.cast<double>() + shift - b_offset).distance);
+    }
+    std::nth_element(errors.begin(), errors.begin() + static_cast<std::ptrdiff_t>(errors.size() / 2), errors.end());
+    final_error = errors[errors.size() / 2];
+  }
+  ASSERT_TRUE(final_error.has_value()) << "no final tile starting at the cut";
+  std::cout << fmt::format("final tile of that submap: median {:.2f} m\n", *final_error);
+  // Several previews while it was built (none before: nothing placed it), each near the true
+  // ground (GPS noise 1 m per axis; the submap's own depth error, from the estimated focal,
+  // moves the ground by a few metres 100 m below, in the final map too), the last one where
+  // the final map puts it.
+  ASSERT_GE(median_errors.size(), 2u);
+  for (double e : median_errors) EXPECT_LT(e, 10.0);
+  EXPECT_LT(std::abs(median_errors.back() - *final_error), 1.0);
+}
+
 // While mapping too: once the second piece's first submap is complete and its frames span enough
 // GPS track, the live revisions place it by its own fit instead of showing it disconnected.
 TEST(GeoreferenceEndToEnd, WhileMappingAPieceTheImagesCannotLinkIsPlacedByGpsToo) {
