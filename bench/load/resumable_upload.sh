@@ -15,22 +15,11 @@ glam="$build/server/glam"
 [[ -x "$glam" ]] || { echo "missing $glam (build target glam)" >&2; exit 2; }
 
 work="$(mktemp -d /tmp/glam_upload_bench.XXXXXX)"
-server_pid=""
-cleanup() {
-  if [[ -n "$server_pid" ]]; then kill "$server_pid" 2>/dev/null || true; wait "$server_pid" 2>/dev/null || true; fi
-  rm -rf "$work"
-}
-trap cleanup EXIT
+source "$here/server.sh"
+trap 'stop_server; rm -rf "$work"' EXIT
 
 head -c "$((size_mb * 1000000))" /dev/urandom > "$work/flight.bin"
-"$glam" --log-level warn serve --data "$work/data" --port 0 > "$work/stdout" &
-server_pid=$!
-for _ in $(seq 100); do
-  grep -q '"port"' "$work/stdout" 2>/dev/null && break
-  sleep 0.1
-done
-port="$(sed -n 's/.*"port": \([0-9]*\).*/\1/p' "$work/stdout" | head -1)"
-[[ -n "$port" ]] || { echo "server did not start" >&2; exit 1; }
+start_server "$glam" "$work"
 url="http://127.0.0.1:$port"
 echo "file: $size_mb MB of random bytes, $(nproc) cores, loopback"
 
@@ -70,6 +59,4 @@ report "cut at $((kept / 1000000)) MB, continued (--upload-id)" "$t0" "$(now)"
 left="$(ls "$work/data/resumable" | wc -l)"
 echo "files left in DIR/resumable: $left (0: every upload was handed over)"
 
-kill -TERM "$server_pid"
-wait "$server_pid" || true
-server_pid=""
+stop_server

@@ -21,12 +21,8 @@ for bin in "$glam" "$loadtest"; do
 done
 
 work="$(mktemp -d /tmp/glam_load.XXXXXX)"
-server_pid=""
-cleanup() {
-  if [[ -n "$server_pid" ]]; then kill "$server_pid" 2>/dev/null || true; wait "$server_pid" 2>/dev/null || true; fi
-  rm -rf "$work"
-}
-trap cleanup EXIT
+source "$here/server.sh"
+trap 'stop_server; rm -rf "$work"' EXIT
 
 if [[ -z "$video" ]]; then
   clip="$build/fixtures/load_clip"
@@ -36,14 +32,7 @@ if [[ -z "$video" ]]; then
 fi
 echo "video: $video ($(stat -c %s "$video") bytes), duration ${duration}s, $(nproc) cores"
 
-"$glam" --log-level warn serve --data "$work/data" --port 0 --max-queued-jobs 100 > "$work/stdout" &
-server_pid=$!
-for _ in $(seq 100); do
-  grep -q '"port"' "$work/stdout" 2>/dev/null && break
-  sleep 0.1
-done
-port="$(sed -n 's/.*"port": \([0-9]*\).*/\1/p' "$work/stdout" | head -1)"
-[[ -n "$port" ]] || { echo "server did not start" >&2; exit 1; }
+start_server "$glam" "$work" --max-queued-jobs 100
 
 status=0
 "$loadtest" --port "$port" --video "$video" --uploads 10 --poll-rate 100 --poll-threads 4 \

@@ -35,6 +35,19 @@ namespace fs = std::filesystem;
 const fs::path kClip = fs::path(GLAM_TEST_FIXTURES_DIR) / "lawnmower_small";
 const Geodetic kOrigin = synth::kSynthGpsOrigin;
 
+// Median distance from the true ground of the points of a tileset child (world = ENU around
+// the first fix): `truth_from_enu` takes a point into the surface's frame.
+double MedianGroundError(const fs::path& out, const nlohmann::json& child, const eval::HeightfieldSurface& surface,
+                         const Eigen::Vector3d& truth_from_enu) {
+  std::vector<double> errors;
+  for (const ColoredPoint& point : glam::testing::ChildTileWorldPoints(out, child)) {
+    errors.push_back(surface.Distance(point.position.cast<double>() + truth_from_enu).distance);
+  }
+  if (errors.empty()) return 1e9;
+  std::nth_element(errors.begin(), errors.begin() + static_cast<std::ptrdiff_t>(errors.size() / 2), errors.end());
+  return errors[errors.size() / 2];
+}
+
 TEST(GeoreferenceEndToEnd, AVideoWithItsSrtIsMappedInMetresEastNorthUp) {
   const fs::path dir = glam::testing::FreshTempDir("georeference_e2e");
   fs::copy_file(kClip / "video.mp4", dir / "DJI_0001.MP4");
@@ -213,12 +226,7 @@ TEST(GeoreferenceEndToEnd, TheFirstSubmapIsPreviewedInMetresEastNorthUp) {
     ++in_enu;
     for (const nlohmann::json& child : tileset["root"]["children"]) {
       if (!child["extras"].value("open", false)) continue;
-      std::vector<double> errors;
-      for (const ColoredPoint& point : glam::testing::ChildTileWorldPoints(out, child)) {
-        errors.push_back(surface.Distance(point.position.cast<double>() + shift).distance);
-      }
-      std::nth_element(errors.begin(), errors.begin() + static_cast<std::ptrdiff_t>(errors.size() / 2), errors.end());
-      median_errors.push_back(errors.empty() ? 1e9 : errors[errors.size() / 2]);
+      median_errors.push_back(MedianGroundError(out, child, surface, shift));
     }
   });
   ASSERT_TRUE(report.georeference.ok) << report.georeference.reason;
@@ -338,12 +346,7 @@ TEST(GeoreferenceEndToEnd, AfterACutTheSubmapBeingBuiltIsPreviewedWhereItsGpsPut
     for (const nlohmann::json& child : tileset["root"]["children"]) {
       if (!child["extras"].value("open", false) || child["extras"]["first_frame"].get<std::int64_t>() < cut) continue;
       ASSERT_TRUE(tileset["root"].contains("transform")) << "a preview after the cut outside the ENU frame";
-      std::vector<double> errors;
-      for (const ColoredPoint& point : glam::testing::ChildTileWorldPoints(out, child)) {
-        errors.push_back(surface_b.Distance(point.position.cast<double>() + shift - b_offset).distance);
-      }
-      std::nth_element(errors.begin(), errors.begin() + static_cast<std::ptrdiff_t>(errors.size() / 2), errors.end());
-      median_errors.push_back(errors.empty() ? 1e9 : errors[errors.size() / 2]);
+      median_errors.push_back(MedianGroundError(out, child, surface_b, shift - b_offset));
     }
   });
   ASSERT_TRUE(report.georeference.ok) << report.georeference.reason;
@@ -356,12 +359,7 @@ TEST(GeoreferenceEndToEnd, AfterACutTheSubmapBeingBuiltIsPreviewedWhereItsGpsPut
   std::optional<double> final_error;
   for (const nlohmann::json& child : tileset["root"]["children"]) {
     if (child["extras"]["first_frame"].get<std::int64_t>() != cut) continue;
-    std::vector<double> errors;
-    for (const ColoredPoint& point : glam::testing::ChildTileWorldPoints(out, child)) {
-      errors.push_back(surface_b.Distance(point.position.cast<double>() + shift - b_offset).distance);
-    }
-    std::nth_element(errors.begin(), errors.begin() + static_cast<std::ptrdiff_t>(errors.size() / 2), errors.end());
-    final_error = errors[errors.size() / 2];
+    final_error = MedianGroundError(out, child, surface_b, shift - b_offset);
   }
   ASSERT_TRUE(final_error.has_value()) << "no final tile starting at the cut";
   std::cout << fmt::format("final tile of that submap: median {:.2f} m\n", *final_error);
