@@ -52,7 +52,7 @@ void RemoveQuietly(const fs::path& path) {
 
 [[noreturn]] void ThrowStorageError(int error_number, const std::string& what) {
   if (error_number == ENOSPC || error_number == EDQUOT || error_number == EFBIG) {
-    throw ApiError(507, "insufficient_storage", "the server's disk is full; the bytes that fit were kept");
+    throw ApiError(507, "insufficient_storage", fmt::format("{}: the server's disk is full", what));
   }
   throw EnvironmentError(fmt::format("{}: {}", what, std::strerror(error_number)));
 }
@@ -333,7 +333,10 @@ UploadSession UploadStore::Appender::Finish() {
   const bool ok = Close();
   // The file is the truth: after a short write, what landed on disk is the offset.
   UploadSession now = store_->Get(session_.id);
-  if (!ok || error_number_ != 0) ThrowStorageError(error_number_, fmt::format("cannot store upload {}", session_.id));
+  if (!ok || error_number_ != 0) {
+    ThrowStorageError(error_number_, fmt::format("upload {} kept only the bytes that could be stored ({})",
+                                                 session_.id, now.offset));
+  }
   return now;
 }
 

@@ -2,7 +2,10 @@
 // sent in chunks becomes a job with exactly its bytes; a PATCH whose connection breaks keeps
 // what arrived, and so does a server restart; every refusal is a documented JSON error that
 // leaves the upload usable.
+#include <sys/resource.h>
 #include <unistd.h>
+
+#include <csignal>
 
 #include <chrono>
 #include <string>
@@ -231,6 +234,30 @@ TEST_F(ResumableUploadTest, TooManyBytesAndACompleteUploadThatIsNoVideo) {
   ExpectError(after.Get("/api/v1/uploads/" + id), 404, "not_found", "consumed by the refused job");
   EXPECT_TRUE(fs::is_empty(dir_ / "data" / "uploads"));
   EXPECT_TRUE(fs::is_empty(dir_ / "data" / "resumable"));
+}
+
+// A disk that fills during a PATCH (here: the process's file-size limit) is a 507; the bytes
+// that were stored stay, the offset says how many, and the rest goes on once there is room.
+TEST_F(ResumableUploadTest, AFullDiskKeepsWhatWasStored) {
+  Start({}, "resumable_disk_full");
+  auto client = Client();
+  const std::string bytes(600 * 1024, 'x');
+  const std::string id = Open(client, static_cast<std::int64_t>(bytes.size()), "a.mp4");
+  std::signal(SIGXFSZ, SIG_IGN);
+  rlimit old_limit{};
+  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &old_limit), 0);
+  rlimit small = old_limit;
+  small.rlim_cur = 256 * 1024;
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &small), 0);
+  auto res = Patch(client, id, 0, bytes);
+  setrlimit(RLIMIT_FSIZE, &old_limit);
+  ExpectError(res, 507, "insufficient_storage", "disk full mid-body");
+  auto again = Client();
+  const std::int64_t kept = OffsetOf(again, id);
+  EXPECT_GT(kept, 0);
+  EXPECT_LE(kept, 256 * 1024);
+  SendFrom(again, id, bytes, static_cast<std::size_t>(kept), 100 * 1024);
+  EXPECT_EQ(OffsetOf(again, id), static_cast<std::int64_t>(bytes.size()));
 }
 
 }  // namespace
