@@ -4,11 +4,14 @@
 #pragma once
 
 #include <arpa/inet.h>
+#include <sys/resource.h>
 #include <netinet/in.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
 #include <chrono>
+#include <csignal>
+#include <functional>
 #include <filesystem>
 #include <memory>
 #include <mutex>
@@ -146,6 +149,20 @@ inline void ExpectError(const httplib::Result& res, int status, const std::strin
     EXPECT_EQ(body["error"]["code"], code) << what;
   }
   EXPECT_FALSE(body["error"]["message"].get<std::string>().empty()) << what;
+}
+
+// Runs `request` while the process may write files of at most `max_file_bytes` (writes past it
+// fail with EFBIG, as they would with ENOSPC on a full disk), then lifts the limit again.
+inline httplib::Result WithFileSizeLimit(rlim_t max_file_bytes, const std::function<httplib::Result()>& request) {
+  std::signal(SIGXFSZ, SIG_IGN);
+  rlimit old_limit{};
+  EXPECT_EQ(getrlimit(RLIMIT_FSIZE, &old_limit), 0);
+  rlimit small = old_limit;
+  small.rlim_cur = max_file_bytes;
+  EXPECT_EQ(setrlimit(RLIMIT_FSIZE, &small), 0);
+  httplib::Result res = request();
+  setrlimit(RLIMIT_FSIZE, &old_limit);
+  return res;
 }
 
 // Starts a PATCH of upload `id` on 127.0.0.1:`port` that declares `declared` body bytes but

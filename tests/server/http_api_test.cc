@@ -1,10 +1,8 @@
 // The REST API over real HTTP on a loopback port, with the real upload probe but a fake
 // engine (fast, deterministic): status codes and JSON errors, auth, path traversal, SSE replay,
 // downloads with ETag / Range, concurrent uploads, and that openapi.yaml documents every route.
-#include <sys/resource.h>
 
 #include <atomic>
-#include <csignal>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -677,14 +675,8 @@ TEST_F(HttpApiTest, FullDiskDuringUploadIs507AndLeavesNoPartialFile) {
   Start({}, "disk_full");
   auto client = Client();
   ASSERT_EQ(client.Get("/api/v1/health")->status, 200);  // store opened and written before the limit
-  std::signal(SIGXFSZ, SIG_IGN);
-  rlimit old_limit{};
-  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &old_limit), 0);
-  rlimit small = old_limit;
-  small.rlim_cur = 256 * 1024;
-  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &small), 0);
-  auto res = client.Post("/api/v1/jobs", std::string(600 * 1024, 'x'), "video/mp4");
-  setrlimit(RLIMIT_FSIZE, &old_limit);
+  auto res = WithFileSizeLimit(256 * 1024,
+                               [&] { return client.Post("/api/v1/jobs", std::string(600 * 1024, 'x'), "video/mp4"); });
   ExpectError(res, 507, "insufficient_storage", "disk full");
   EXPECT_TRUE(fs::is_empty(dir_ / "data" / "uploads"));
   auto again = Client();

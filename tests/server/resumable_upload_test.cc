@@ -2,10 +2,8 @@
 // sent in chunks becomes a job with exactly its bytes; a PATCH whose connection breaks keeps
 // what arrived, and so does a server restart; every refusal is a documented JSON error that
 // leaves the upload usable.
-#include <sys/resource.h>
 #include <unistd.h>
 
-#include <csignal>
 
 #include <chrono>
 #include <string>
@@ -243,14 +241,7 @@ TEST_F(ResumableUploadTest, AFullDiskKeepsWhatWasStored) {
   auto client = Client();
   const std::string bytes(600 * 1024, 'x');
   const std::string id = Open(client, static_cast<std::int64_t>(bytes.size()), "a.mp4");
-  std::signal(SIGXFSZ, SIG_IGN);
-  rlimit old_limit{};
-  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &old_limit), 0);
-  rlimit small = old_limit;
-  small.rlim_cur = 256 * 1024;
-  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &small), 0);
-  auto res = Patch(client, id, 0, bytes);
-  setrlimit(RLIMIT_FSIZE, &old_limit);
+  auto res = WithFileSizeLimit(256 * 1024, [&] { return Patch(client, id, 0, bytes); });
   ExpectError(res, 507, "insufficient_storage", "disk full mid-body");
   auto again = Client();
   const std::int64_t kept = OffsetOf(again, id);
