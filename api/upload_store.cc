@@ -1,8 +1,10 @@
 #include "api/upload_store.h"
 
+#include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <fstream>
@@ -12,6 +14,7 @@
 
 #include "api/api_error.h"
 #include "api/ids.h"
+#include "api/image_names.h"
 #include "api/job.h"
 #include "api/job_json.h"
 #include "engine/core/atomic_file.h"
@@ -26,6 +29,7 @@ using nlohmann::json;
 
 constexpr const char* kMetaSuffix = ".json";
 constexpr const char* kDataSuffix = ".data";
+constexpr const char* kImagesSuffix = ".images";
 
 // The client's name without directories, at most 200 characters ("upload" when empty).
 std::string CleanFilename(const std::string& name) {
@@ -46,8 +50,30 @@ bool StatFile(const fs::path& path, std::int64_t* size, std::int64_t* mtime_ms) 
 
 void RemoveQuietly(const fs::path& path) {
   std::error_code ec;
-  fs::remove(path, ec);
+  fs::remove_all(path, ec);
   if (ec) GLAM_LOG_WARN("cannot remove {}: {}", path.string(), ec.message());
+}
+
+// An image set's images (not the ones still arriving: ".<name>.part"), by name.
+std::vector<StoredImage> ListImages(const fs::path& folder) {
+  std::vector<StoredImage> images;
+  std::error_code ec;
+  for (const fs::directory_entry& entry : fs::directory_iterator(folder, ec)) {
+    const std::string name = entry.path().filename().string();
+    std::int64_t size = 0, mtime = 0;
+    if (name.empty() || name.front() == '.' || !StatFile(entry.path(), &size, &mtime)) continue;
+    images.push_back({name, size});
+  }
+  std::sort(images.begin(), images.end(), [](const StoredImage& a, const StoredImage& b) { return a.name < b.name; });
+  return images;
+}
+
+[[noreturn]] void ThrowWrongKind(const std::string& id, UploadKind kind) {
+  throw ApiError(409, "wrong_kind",
+                 kind == UploadKind::kImages
+                     ? fmt::format("upload {} is an image set: PUT each image to /api/v1/uploads/{}/images/{{name}}",
+                                   id, id)
+                     : fmt::format("upload {} is a single file: PATCH its bytes to /api/v1/uploads/{}", id, id));
 }
 
 [[noreturn]] void ThrowStorageError(int error_number, const std::string& what) {
@@ -68,17 +94,26 @@ void UploadStoreOptions::Check() const {
   }
 }
 
+const char* UploadKindName(UploadKind kind) { return kind == UploadKind::kImages ? "images" : "file"; }
+
 json UploadToJson(const UploadSession& s, std::chrono::seconds expiry) {
   const std::int64_t expires_ms = s.updated_ms + std::chrono::duration_cast<std::chrono::milliseconds>(expiry).count();
-  return {{"id", s.id},
-          {"filename", s.filename},
-          {"size", s.size},
-          {"offset", s.offset},
-          {"complete", s.complete()},
-          {"created_at", FormatTimestamp(s.created_ms)},
-          {"updated_at", FormatTimestamp(s.updated_ms)},
-          {"expires_at", FormatTimestamp(expires_ms)},
-          {"url", "/api/v1/uploads/" + s.id}};
+  json j = {{"id", s.id},
+            {"kind", UploadKindName(s.kind)},
+            {"filename", s.filename},
+            {"size", s.size},
+            {"offset", s.offset},
+            {"complete", s.complete()},
+            {"created_at", FormatTimestamp(s.created_ms)},
+            {"updated_at", FormatTimestamp(s.updated_ms)},
+            {"expires_at", FormatTimestamp(expires_ms)},
+            {"url", "/api/v1/uploads/" + s.id}};
+  if (s.kind == UploadKind::kImages) {
+    json images = json::array();
+    for (const StoredImage& image : s.images) images.push_back({{"name", image.name}, {"size", image.size}});
+    j["images"] = std::move(images);
+  }
+  return j;
 }
 
 UploadStore::UploadStore(UploadStoreOptions options) : options_(std::move(options)) {
@@ -88,17 +123,27 @@ UploadStore::UploadStore(UploadStoreOptions options) : options_(std::move(option
   if (ec) {
     throw EnvironmentError(fmt::format("cannot create upload directory {}: {}", options_.dir.string(), ec.message()));
   }
-  // Stray files: a data file without its session (the process stopped inside Create) or a
-  // session without data (removed by hand), and anything else.
-  for (const fs::directory_entry& entry : fs::directory_iterator(options_.dir, ec)) {
-    const fs::path& p = entry.path();
+  // Stray files: a data file or image folder without its session (the process stopped
+  // inside Create) or a session without data (removed by hand), images that were still
+  // arriving when the process stopped, and anything else.
+  std::vector<fs::path> entries;
+  for (const fs::directory_entry& entry : fs::directory_iterator(options_.dir, ec)) entries.push_back(entry.path());
+  for (const fs::path& p : entries) {
     const std::string id = p.stem().string();
     const std::string ext = p.extension().string();
-    const bool ours = IsValidJobId(id) && (ext == kMetaSuffix || ext == kDataSuffix);
-    const fs::path partner = ext == kMetaSuffix ? DataPath(id) : MetaPath(id);
-    if (!ours || !fs::exists(partner)) {
+    const bool ours = IsValidJobId(id) && (ext == kMetaSuffix || ext == kDataSuffix || ext == kImagesSuffix);
+    const bool partnered = ext == kMetaSuffix ? fs::exists(DataPath(id)) || fs::exists(ImagesPath(id))
+                                              : fs::exists(MetaPath(id));
+    if (!ours || !partnered) {
       GLAM_LOG_INFO("removing stray upload file {}", p.string());
       RemoveQuietly(p);
+      continue;
+    }
+    if (ext != kImagesSuffix) continue;
+    for (const fs::directory_entry& image : fs::directory_iterator(p, ec)) {
+      if (image.path().filename().string().front() != '.') continue;
+      GLAM_LOG_INFO("removing {}: its request ended before its last byte", image.path().string());
+      RemoveQuietly(image.path());
     }
   }
   const int expired = RemoveExpired();
@@ -110,6 +155,13 @@ UploadStore::UploadStore(UploadStoreOptions options) : options_(std::move(option
 
 fs::path UploadStore::MetaPath(const std::string& id) const { return options_.dir / (id + kMetaSuffix); }
 fs::path UploadStore::DataPath(const std::string& id) const { return options_.dir / (id + kDataSuffix); }
+fs::path UploadStore::ImagesPath(const std::string& id) const { return options_.dir / (id + kImagesSuffix); }
+
+void UploadStore::RemoveFilesLocked(const std::string& id) const {
+  RemoveQuietly(MetaPath(id));
+  RemoveQuietly(DataPath(id));
+  RemoveQuietly(ImagesPath(id));
+}
 
 UploadSession UploadStore::LoadLocked(const std::string& id) const {
   if (!IsValidJobId(id)) {
@@ -117,10 +169,11 @@ UploadSession UploadStore::LoadLocked(const std::string& id) const {
   }
   UploadSession s;
   s.id = id;
+  const auto not_found = [&id] {
+    return ApiError(404, "not_found", fmt::format("no upload with id {} (it may have expired)", id));
+  };
   std::int64_t meta_size = 0, meta_mtime = 0;
-  if (!StatFile(MetaPath(id), &meta_size, &meta_mtime) || !StatFile(DataPath(id), &s.offset, &s.updated_ms)) {
-    throw ApiError(404, "not_found", fmt::format("no upload with id {} (it may have expired)", id));
-  }
+  if (!StatFile(MetaPath(id), &meta_size, &meta_mtime)) throw not_found();
   std::ifstream in(MetaPath(id));
   std::stringstream text;
   text << in.rdbuf();
@@ -128,9 +181,19 @@ UploadSession UploadStore::LoadLocked(const std::string& id) const {
   if (!meta.is_object() || !meta.contains("size") || !meta["size"].is_number_integer()) {
     throw EnvironmentError(fmt::format("upload record {} is unreadable", MetaPath(id).string()));
   }
+  s.kind = meta.value("kind", std::string("file")) == "images" ? UploadKind::kImages : UploadKind::kFile;
   s.size = meta["size"].get<std::int64_t>();
   s.filename = meta.value("filename", std::string("upload"));
   s.created_ms = meta.value("created_ms", meta_mtime);
+  if (s.kind == UploadKind::kFile) {
+    if (!StatFile(DataPath(id), &s.offset, &s.updated_ms)) throw not_found();
+    return s;
+  }
+  // An image set: its folder's time changes as an image starts and as it is stored.
+  std::int64_t folder_size = 0;
+  if (!StatFile(ImagesPath(id), &folder_size, &s.updated_ms)) throw not_found();
+  s.images = ListImages(ImagesPath(id));
+  for (const StoredImage& image : s.images) s.offset += image.size;
   return s;
 }
 
@@ -153,7 +216,7 @@ int UploadStore::open_sessions() const {
   return static_cast<int>(ListLocked().size());
 }
 
-UploadSession UploadStore::Create(std::int64_t size, const std::string& filename) {
+UploadSession UploadStore::Create(std::int64_t size, const std::string& filename, UploadKind kind) {
   if (size < 1) throw ApiError(400, "bad_request", fmt::format("size must be at least 1 byte, got {}", size));
   if (size > options_.max_bytes) {
     throw ApiError(413, "payload_too_large",
@@ -181,23 +244,34 @@ UploadSession UploadStore::Create(std::int64_t size, const std::string& filename
   UploadSession s;
   do {
     s.id = NewJobId();
-  } while (fs::exists(MetaPath(s.id)) || fs::exists(DataPath(s.id)));
+  } while (fs::exists(MetaPath(s.id)) || fs::exists(DataPath(s.id)) || fs::exists(ImagesPath(s.id)));
+  s.kind = kind;
   s.filename = CleanFilename(filename);
   s.size = size;
   s.created_ms = NowMs();
   s.updated_ms = s.created_ms;
-  // The data file first: a stray one is removed at startup, a session without it is not.
-  std::FILE* data = std::fopen(DataPath(s.id).c_str(), "wb");
-  if (data == nullptr) ThrowStorageError(errno, fmt::format("cannot create {}", DataPath(s.id).string()));
-  std::fclose(data);
+  // The data file (or image folder) first: a stray one is removed at startup, a session
+  // without it is not.
+  if (kind == UploadKind::kImages) {
+    if (::mkdir(ImagesPath(s.id).c_str(), 0755) != 0) {
+      ThrowStorageError(errno, fmt::format("cannot create {}", ImagesPath(s.id).string()));
+    }
+  } else {
+    std::FILE* data = std::fopen(DataPath(s.id).c_str(), "wb");
+    if (data == nullptr) ThrowStorageError(errno, fmt::format("cannot create {}", DataPath(s.id).string()));
+    std::fclose(data);
+  }
   try {
-    WriteFileAtomically(MetaPath(s.id),
-                        json{{"size", s.size}, {"filename", s.filename}, {"created_ms", s.created_ms}}.dump());
+    WriteFileAtomically(MetaPath(s.id), json{{"kind", UploadKindName(kind)},
+                                             {"size", s.size},
+                                             {"filename", s.filename},
+                                             {"created_ms", s.created_ms}}
+                                            .dump());
   } catch (...) {
-    RemoveQuietly(DataPath(s.id));
+    RemoveFilesLocked(s.id);
     throw;
   }
-  GLAM_LOG_INFO("upload {} opened: {} bytes of {}", s.id, s.size, s.filename);
+  GLAM_LOG_INFO("upload {} opened: {} bytes of {} ({})", s.id, s.size, s.filename, UploadKindName(kind));
   return s;
 }
 
@@ -209,6 +283,7 @@ UploadSession UploadStore::Get(const std::string& id) const {
 UploadStore::Appender UploadStore::Append(const std::string& id, std::int64_t offset) {
   std::lock_guard lock(mutex_);
   const UploadSession s = LoadLocked(id);
+  if (s.kind != UploadKind::kFile) ThrowWrongKind(id, s.kind);
   if (busy_.count(id)) {
     throw ApiError(409, "upload_busy", fmt::format("another request is sending bytes of upload {}", id));
   }
@@ -241,16 +316,23 @@ UploadSession UploadStore::Take(const std::string& id, const fs::path& destinati
   std::lock_guard lock(mutex_);
   const UploadSession s = LoadCompleteLocked(id);
   std::error_code ec;
-  fs::rename(DataPath(id), destination, ec);
+  fs::rename(s.kind == UploadKind::kImages ? ImagesPath(id) : DataPath(id), destination, ec);
   if (ec) throw EnvironmentError(fmt::format("cannot move upload {}: {}", id, ec.message()));
   RemoveQuietly(MetaPath(id));
-  GLAM_LOG_INFO("upload {} complete ({} bytes), handed to a job", id, s.size);
+  GLAM_LOG_INFO("upload {} complete ({} bytes{}), handed to a job", id, s.size,
+                s.kind == UploadKind::kImages ? fmt::format(", {} images", s.images.size()) : std::string());
   return s;
+}
+
+UploadSession UploadStore::GetComplete(const std::string& id) const {
+  std::lock_guard lock(mutex_);
+  return LoadCompleteLocked(id);
 }
 
 fs::path UploadStore::CompleteDataFile(const std::string& id) const {
   std::lock_guard lock(mutex_);
-  LoadCompleteLocked(id);
+  const UploadSession s = LoadCompleteLocked(id);
+  if (s.kind != UploadKind::kFile) ThrowWrongKind(id, s.kind);
   return DataPath(id);
 }
 
@@ -260,8 +342,7 @@ void UploadStore::Remove(const std::string& id) {
   if (busy_.count(id)) {
     throw ApiError(409, "upload_busy", fmt::format("another request is sending bytes of upload {}", id));
   }
-  RemoveQuietly(MetaPath(id));
-  RemoveQuietly(DataPath(id));
+  RemoveFilesLocked(id);
   GLAM_LOG_INFO("upload {} deleted", id);
 }
 
@@ -273,11 +354,38 @@ int UploadStore::RemoveExpired() {
     if (busy_.count(s.id) || s.updated_ms >= cutoff) continue;
     GLAM_LOG_INFO("upload {} expired ({} of {} bytes, last byte at {}): removed", s.id, s.offset, s.size,
                   FormatTimestamp(s.updated_ms));
-    RemoveQuietly(MetaPath(s.id));
-    RemoveQuietly(DataPath(s.id));
+    RemoveFilesLocked(s.id);
     ++removed;
   }
   return removed;
+}
+
+UploadStore::ImageWriter UploadStore::PutImage(const std::string& id, const std::string& name, std::int64_t length) {
+  std::lock_guard lock(mutex_);
+  const UploadSession s = LoadLocked(id);
+  if (s.kind != UploadKind::kImages) ThrowWrongKind(id, s.kind);
+  if (busy_.count(id)) {
+    throw ApiError(409, "upload_busy", fmt::format("another request is sending an image of upload {}", id));
+  }
+  if (name.empty() || SafeImageName(name) != name) throw ApiError(400, "bad_image", NotAnImageNameMessage(name));
+  if (length < 1) throw ApiError(400, "bad_image", fmt::format("image \"{}\" is empty", name));
+  const auto same = std::find_if(s.images.begin(), s.images.end(), [&](const StoredImage& i) { return i.name == name; });
+  const std::int64_t replaced = same != s.images.end() ? same->size : 0;
+  if (same == s.images.end() && s.images.size() >= kMaxImagesPerJob) {
+    throw ApiError(400, "bad_image", fmt::format("more than {} images in one job", kMaxImagesPerJob));
+  }
+  if (s.offset - replaced + length > s.size) {
+    throw ApiError(413, "payload_too_large",
+                   fmt::format("image \"{}\" ({} bytes) does not fit in the set's declared size: {} of {} bytes are "
+                               "taken{}",
+                               name, length, s.offset - replaced, s.size,
+                               replaced > 0 ? " by the other images" : ""));
+  }
+  const fs::path temp = ImagesPath(id) / ("." + name + ".part");
+  std::FILE* file = std::fopen(temp.c_str(), "wb");
+  if (file == nullptr) ThrowStorageError(errno, fmt::format("cannot create {}", temp.string()));
+  busy_.insert(id);
+  return ImageWriter(this, id, temp, ImagesPath(id) / name, length, file);
 }
 
 void UploadStore::Release(const std::string& id) {
@@ -338,6 +446,69 @@ UploadSession UploadStore::Appender::Finish() {
                                                  session_.id, now.offset));
   }
   return now;
+}
+
+}  // namespace glam::api
+
+namespace glam::api {
+
+UploadStore::ImageWriter::ImageWriter(UploadStore* store, std::string id, fs::path temp, fs::path final_path,
+                                      std::int64_t length, std::FILE* file)
+    : store_(store), id_(std::move(id)), temp_(std::move(temp)), final_(std::move(final_path)), length_(length),
+      file_(file) {}
+
+UploadStore::ImageWriter::ImageWriter(ImageWriter&& other) noexcept
+    : store_(other.store_), id_(std::move(other.id_)), temp_(std::move(other.temp_)),
+      final_(std::move(other.final_)), length_(other.length_), file_(other.file_), received_(other.received_),
+      too_large_(other.too_large_), error_number_(other.error_number_), stored_(other.stored_) {
+  other.store_ = nullptr;
+  other.file_ = nullptr;
+}
+
+UploadStore::ImageWriter::~ImageWriter() {
+  if (store_ == nullptr) return;
+  if (file_ != nullptr) std::fclose(file_);
+  if (!stored_) RemoveQuietly(temp_);
+  store_->Release(id_);
+}
+
+bool UploadStore::ImageWriter::Write(const char* data, std::size_t size) {
+  if (file_ == nullptr || error_number_ != 0) return false;
+  if (received_ + static_cast<std::int64_t>(size) > length_) {
+    too_large_ = true;
+    return false;
+  }
+  if (std::fwrite(data, 1, size, file_) != size) {
+    error_number_ = errno != 0 ? errno : EIO;
+    return false;
+  }
+  received_ += static_cast<std::int64_t>(size);
+  return true;
+}
+
+UploadSession UploadStore::ImageWriter::Finish() {
+  bool ok = std::fflush(file_) == 0 && ::fsync(fileno(file_)) == 0;
+  if (!ok && error_number_ == 0) error_number_ = errno;
+  std::fclose(file_);
+  file_ = nullptr;
+  const std::string name = final_.filename().string();
+  if (error_number_ != 0) ThrowStorageError(error_number_, fmt::format("image \"{}\" was not stored", name));
+  if (received_ != length_) {
+    throw ApiError(400, "bad_upload",
+                   fmt::format("image \"{}\": {} of its {} bytes arrived; it was not stored, send it again", name,
+                               received_, length_));
+  }
+  std::error_code ec;
+  fs::rename(temp_, final_, ec);
+  if (ec) throw EnvironmentError(fmt::format("cannot store image \"{}\": {}", name, ec.message()));
+  stored_ = true;
+  // The rename is durable once the folder is synced.
+  const int folder = ::open(final_.parent_path().c_str(), O_RDONLY | O_DIRECTORY);
+  if (folder >= 0) {
+    ::fsync(folder);
+    ::close(folder);
+  }
+  return store_->Get(id_);
 }
 
 }  // namespace glam::api

@@ -4,10 +4,16 @@
 // dropped connections and server restarts, and the client continues from the offset the
 // server reports (the tus.io idea, without its protocol negotiation).
 //
+// Two kinds of session: a file (a video, or its .SRT track), sent in byte ranges (PATCH), and
+// an image set (a photo survey: hundreds of 5-10 MB JPEGs), sent one whole image at a time
+// (PUT of one name); a photo is small enough to resend whole, so only complete images count.
+//
 // On disk, next to the job store (DIR/resumable/):
-//   <id>.json   the session: declared size, client file name, creation time (written once)
-//   <id>.data   the bytes received so far; its length *is* the offset, so a crash can never
-//               leave the two disagreeing, and nothing needs rewriting per chunk
+//   <id>.json    the session: kind, declared size, client name, creation time (written once)
+//   <id>.data    a file's bytes received so far; its length *is* the offset, so a crash can
+//                never leave the two disagreeing, and nothing needs rewriting per chunk
+//   <id>.images/ an image set's complete images (the offset is the sum of their sizes); an
+//                image being received is ".<name>.part" there until its last byte is synced
 // A session untouched for `expiry` is removed (at startup and whenever a session is created),
 // as is a file without its partner.
 //
@@ -41,18 +47,30 @@ struct UploadStoreOptions {
   void Check() const;  // throws InputError
 };
 
+enum class UploadKind { kFile, kImages };
+
+// "file" or "images", as in the JSON.
+const char* UploadKindName(UploadKind kind);
+
+struct StoredImage {
+  std::string name;  // api::SafeImageName-clean
+  std::int64_t size = 0;
+};
+
 struct UploadSession {
   std::string id;
+  UploadKind kind = UploadKind::kFile;
   std::string filename;  // as the client named it (display only; never a path)
   std::int64_t size = 0;    // declared total
-  std::int64_t offset = 0;  // bytes received
+  std::int64_t offset = 0;  // bytes received (an image set: of its complete images)
   std::int64_t created_ms = 0;
   std::int64_t updated_ms = 0;  // when the last byte arrived (creation if none)
+  std::vector<StoredImage> images;  // an image set's images, by name
   bool complete() const { return offset == size; }
 };
 
-// The session as JSON: id, filename, size, offset, complete, created_at, updated_at,
-// expires_at (ISO 8601 UTC) and url.
+// The session as JSON: id, kind, filename, size, offset, complete, created_at, updated_at,
+// expires_at (ISO 8601 UTC) and url; an image set also its images ([{name, size}]).
 nlohmann::json UploadToJson(const UploadSession& session, std::chrono::seconds expiry);
 
 class UploadStore {
@@ -67,7 +85,7 @@ class UploadStore {
   // "payload_too_large" (size > max_bytes), 503 "too_many_uploads", 507
   // "insufficient_storage" (the free disk minus what the open sessions still expect is less
   // than `size`).
-  UploadSession Create(std::int64_t size, const std::string& filename);
+  UploadSession Create(std::int64_t size, const std::string& filename, UploadKind kind = UploadKind::kFile);
 
   // ApiError 400 "invalid_id", 404 "not_found".
   UploadSession Get(const std::string& id) const;
@@ -108,16 +126,65 @@ class UploadStore {
 
   // ApiError: 400 / 404 as Get, 409 "upload_busy" (another request is appending), 409
   // "offset_mismatch" (`offset` is not the session's offset: the client resends from the
-  // offset GET reports), 409 "upload_complete" (nothing left to send).
+  // offset GET reports), 409 "upload_complete" (nothing left to send), 409 "wrong_kind" (an
+  // image set).
   Appender Append(const std::string& id, std::int64_t offset);
 
-  // Ends a complete session and moves its bytes to `destination` (same file system); the
-  // session is gone afterwards. ApiError: 400 / 404 as Get, 409 "upload_busy", 409
-  // "upload_incomplete". Returns the session as it was.
+  // Receives one image of an image set, `length` bytes, stored as `name` (replacing an image
+  // of that name) only once every byte arrived and was synced; a broken request stores
+  // nothing, and the client sends that image again. The session is held until destruction.
+  class ImageWriter {
+   public:
+    ImageWriter(ImageWriter&& other) noexcept;
+    ImageWriter& operator=(ImageWriter&&) = delete;
+    ImageWriter(const ImageWriter&) = delete;
+    ImageWriter& operator=(const ImageWriter&) = delete;
+    ~ImageWriter();
+
+    // False when the bytes go past `length` (too_large()) or the disk refused them
+    // (error_number()).
+    bool Write(const char* data, std::size_t size);
+    // Stores the image and returns the session as it now is. ApiError 400 "bad_upload" when
+    // fewer than `length` bytes arrived, 507 for a full disk; EnvironmentError otherwise.
+    UploadSession Finish();
+
+    bool too_large() const { return too_large_; }
+    std::int64_t received() const { return received_; }
+
+   private:
+    friend class UploadStore;
+    ImageWriter(UploadStore* store, std::string id, std::filesystem::path temp, std::filesystem::path final_path,
+                std::int64_t length, std::FILE* file);
+
+    UploadStore* store_;
+    std::string id_;
+    std::filesystem::path temp_;
+    std::filesystem::path final_;
+    std::int64_t length_;
+    std::FILE* file_;
+    std::int64_t received_ = 0;
+    bool too_large_ = false;
+    int error_number_ = 0;
+    bool stored_ = false;
+  };
+
+  // `name`: as api::SafeImageName makes it. ApiError: 400 / 404 as Get, 400 "bad_image" (not
+  // a clean image name, an empty image, more than kMaxImagesPerJob images), 409
+  // "upload_busy", 409 "wrong_kind" (a file session), 413 "payload_too_large" (the set's
+  // declared size cannot hold it).
+  ImageWriter PutImage(const std::string& id, const std::string& name, std::int64_t length);
+
+  // Ends a complete session and moves its bytes (a file; an image set: the folder of its
+  // images) to `destination` (same file system); the session is gone afterwards. ApiError:
+  // 400 / 404 as Get, 409 "upload_busy", 409 "upload_incomplete". Returns the session as it
+  // was.
   UploadSession Take(const std::string& id, const std::filesystem::path& destination);
 
-  // The data file of a complete session, to read (a telemetry track); the session stays.
-  // Same errors as Take.
+  // A complete session, checked as Take checks it, left in place.
+  UploadSession GetComplete(const std::string& id) const;
+
+  // The data file of a complete file session, to read (a telemetry track); the session stays.
+  // Same errors as Take, and 409 "wrong_kind" for an image set.
   std::filesystem::path CompleteDataFile(const std::string& id) const;
 
   // Removes the session and its bytes. 400 / 404 as Get, 409 "upload_busy".
@@ -131,6 +198,9 @@ class UploadStore {
  private:
   std::filesystem::path MetaPath(const std::string& id) const;
   std::filesystem::path DataPath(const std::string& id) const;
+  std::filesystem::path ImagesPath(const std::string& id) const;
+  // Removes a session's files, whichever kind.
+  void RemoveFilesLocked(const std::string& id) const;
   // Reads a session from disk (400 for a malformed id, 404 when missing). Under mutex_.
   UploadSession LoadLocked(const std::string& id) const;
   // As LoadLocked, and 409 unless no Appender holds it and every byte arrived.

@@ -69,6 +69,9 @@ void HandleGetUpload(Context& ctx, const httplib::Request& req, httplib::Respons
 void HandleDeleteUpload(Context& ctx, const httplib::Request& req, httplib::Response& res);
 void HandleAppendUpload(Context& ctx, const httplib::Request& req, httplib::Response& res,
                         const httplib::ContentReader& reader);
+// PUT /api/v1/uploads/{id}/images/{name}: one whole photo of an image set.
+void HandlePutUploadImage(Context& ctx, const httplib::Request& req, httplib::Response& res,
+                          const httplib::ContentReader& reader);
 // Counts a request that receives upload bytes against max_concurrent_uploads (503 beyond).
 class UploadSlot {
  public:

@@ -5,6 +5,9 @@
 //   GET    /api/v1/uploads/{id}                                            -> 200 session
 //   DELETE /api/v1/uploads/{id}                                            -> 204
 //   POST   /api/v1/jobs           {"upload_id": id, "options": {...}}      -> 201 job
+// and for photos, an image set:
+//   POST   /api/v1/uploads        {"kind": "images", "size": N (all photos), "filename": "survey"}
+//   PUT    /api/v1/uploads/{id}/images/{name}   one whole photo            -> 200 session
 //
 // Every answer about a session carries its offset in an Upload-Offset header as well as in
 // the JSON, so a client can resume from a HEAD (GET without body) alone. A PATCH keeps the
@@ -16,6 +19,7 @@
 
 #include "api/api_error.h"
 #include "api/ids.h"
+#include "api/image_names.h"
 #include "server/http_context.h"
 
 namespace glam::server {
@@ -60,18 +64,28 @@ void HandleCreateUpload(Context& ctx, const httplib::Request&, httplib::Response
                         const httplib::ContentReader& reader) {
   const nlohmann::json j = ReadJsonObjectBody(res, reader, 16 * 1024, "an upload request");
   for (const auto& [key, value] : j.items()) {
-    if (key != "size" && key != "filename") {
-      throw ApiError(400, "bad_request", fmt::format("unknown field \"{}\" (size, filename)", key));
+    if (key != "size" && key != "filename" && key != "kind") {
+      throw ApiError(400, "bad_request", fmt::format("unknown field \"{}\" (size, filename, kind)", key));
+    }
+  }
+  api::UploadKind kind = api::UploadKind::kFile;
+  if (j.contains("kind")) {
+    const std::string text = j["kind"].is_string() ? j["kind"].get<std::string>() : j["kind"].dump();
+    if (text == "images") {
+      kind = api::UploadKind::kImages;
+    } else if (text != "file") {
+      throw ApiError(400, "bad_request", fmt::format("kind must be \"file\" or \"images\", got {}", text));
     }
   }
   if (!j.contains("size") || !j["size"].is_number_integer()) {
-    throw ApiError(400, "bad_request", "size (the whole file's length in bytes, an integer) is required");
+    throw ApiError(400, "bad_request",
+                   "size (the whole file's length in bytes, or the sum of an image set's, an integer) is required");
   }
   if (j.contains("filename") && !j["filename"].is_string()) {
     throw ApiError(400, "bad_request", "filename must be a string");
   }
   const api::UploadSession session =
-      ctx.uploads.Create(j["size"].get<std::int64_t>(), j.value("filename", std::string()));
+      ctx.uploads.Create(j["size"].get<std::int64_t>(), j.value("filename", std::string()), kind);
   res.set_header("Location", "/api/v1/uploads/" + session.id);
   SendSession(ctx, res, 201, session);
 }
@@ -132,6 +146,46 @@ void HandleAppendUpload(Context& ctx, const httplib::Request& req, httplib::Resp
                    fmt::format("the body could not be read completely; {} bytes are kept, resume from there",
                                session.offset));
   }
+  SendSession(ctx, res, 200, session);
+}
+
+void HandlePutUploadImage(Context& ctx, const httplib::Request& req, httplib::Response& res,
+                          const httplib::ContentReader& reader) {
+  const std::string id = JobIdParam(req);
+  const std::string name = req.matches.size() > 2 ? std::string(req.matches[2]) : std::string();
+  std::optional<UploadSlot> slot;
+  std::optional<api::UploadStore::ImageWriter> writer;
+  try {
+    const std::string content_type = req.get_header_value("Content-Type");
+    const std::string media_type = content_type.substr(0, content_type.find(';'));
+    if (media_type.rfind("image/", 0) != 0 && media_type != "application/octet-stream") {
+      throw ApiError(415, "unsupported_media_type",
+                     fmt::format("send the photo as image/* or application/octet-stream, not \"{}\"", content_type));
+    }
+    // Names are checked, not changed: the name a client sends is the one it later finds in
+    // the set's list, so it knows what is there.
+    const std::string clean = api::SafeImageName(name);
+    if (clean.empty()) throw ApiError(400, "bad_image", api::NotAnImageNameMessage(name));
+    if (clean != name) {
+      throw ApiError(400, "bad_image",
+                     fmt::format("\"{}\": image names in a set are letters, digits, '.', '-' and '_' only, not "
+                                 "starting with '.'; send it as \"{}\"", name, clean));
+    }
+    if (!req.has_header("Content-Length") || req.get_header_value("Transfer-Encoding") == "chunked") {
+      throw ApiError(411, "length_required", "send each photo with a Content-Length (not chunked)");
+    }
+    const auto length = req.get_header_value<std::uint64_t>("Content-Length");
+    slot.emplace(ctx);  // 503 beyond max_concurrent_uploads
+    writer.emplace(ctx.uploads.PutImage(id, name, static_cast<std::int64_t>(length)));
+  } catch (const ApiError&) {
+    writer.reset();
+    DrainRejectedBody(req, res, reader);
+    throw;
+  }
+  const bool read_ok = reader([&](const char* data, std::size_t size) { return writer->Write(data, size); });
+  if (!read_ok || writer->too_large()) res.set_header("Connection", "close");
+  const api::UploadSession session = writer->Finish();  // stores it only when every byte arrived
+  writer.reset();
   SendSession(ctx, res, 200, session);
 }
 

@@ -124,6 +124,7 @@ const std::vector<RouteDef>& RouteTable() {
     plain("GET", "/api/v1/uploads/{id}", true, HandleGetUpload);
     t.push_back(RouteDef{"PATCH", "/api/v1/uploads/{id}", true, nullptr, HandleAppendUpload});
     plain("DELETE", "/api/v1/uploads/{id}", true, HandleDeleteUpload);
+    t.push_back(RouteDef{"PUT", "/api/v1/uploads/{id}/images/{name}", true, nullptr, HandlePutUploadImage});
     plain("POST", "/api/v1/jobs/{id}/cancel", true, [](Context& ctx, const Request& req, Response& res) {
       SendJson(res, 200, api::JobToJson(ctx.service.Cancel(JobIdParam(req))));
     });
@@ -259,7 +260,7 @@ HttpServer::HttpServer(api::JobService& service, HttpServerOptions options)
                                   {"Access-Control-Expose-Headers", "Location, ETag, Content-Range, Upload-Offset"}});
     server_->Options(".*", [](const Request&, Response& res) {
       res.status = 204;
-      res.set_header("Access-Control-Allow-Methods", "GET, POST, PATCH, DELETE, OPTIONS");
+      res.set_header("Access-Control-Allow-Methods", "GET, POST, PUT, PATCH, DELETE, OPTIONS");
       res.set_header("Access-Control-Allow-Headers",
                      "Authorization, Content-Type, Last-Event-ID, X-Glam-Options, Range, If-None-Match, "
                      "Upload-Offset");
@@ -306,6 +307,8 @@ HttpServer::HttpServer(api::JobService& service, HttpServerOptions options)
       };
       if (def.method == "PATCH") {
         server_->Patch(pattern, with_reader);
+      } else if (def.method == "PUT") {
+        server_->Put(pattern, with_reader);
       } else {
         server_->Post(pattern, with_reader);
       }

@@ -9,7 +9,6 @@
 // input, mapped like `glam map FOLDER`.
 #include <unistd.h>
 
-#include <cctype>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -23,11 +22,11 @@
 #include <fmt/format.h>
 
 #include "api/api_error.h"
+#include "api/image_names.h"
 #include "api/job_json.h"
 #include "engine/geo/gps_track.h"
 #include "engine/core/error.h"
 #include "engine/core/logging.h"
-#include "engine/video/image_folder_source.h"
 #include "server/http_context.h"
 
 namespace glam::server {
@@ -39,8 +38,6 @@ using api::ApiError;
 constexpr std::size_t kMaxOptionsBytes = 64 * 1024;
 // A DJI .SRT has ~250 bytes per frame: 64 MiB holds ~2.5 hours of 30 fps telemetry.
 constexpr std::size_t kMaxTelemetryBytes = 64u << 20;
-// Photos per job: large surveys have a few thousand.
-constexpr std::size_t kMaxImages = 20000;
 
 // The temporary upload file; removed unless Release()d (ownership passes to the service).
 class TempUpload {
@@ -118,21 +115,6 @@ class TempFolder {
   fs::path path_;
   bool released_ = false;
 };
-
-// The name a photo is stored under: the client's file name without any directory part, with
-// every character but letters, digits, '.', '-' and '_' replaced by '_' and no leading dot.
-// Empty when nothing is left or it lacks an image extension (.jpg, .png, .tif, ...).
-std::string SafeImageName(const std::string& client_name) {
-  const auto slash = client_name.find_last_of("/\\");
-  std::string name = slash == std::string::npos ? client_name : client_name.substr(slash + 1);
-  for (char& c : name) {
-    const bool ok = std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '.' || c == '-' || c == '_';
-    if (!ok) c = '_';
-  }
-  name.erase(0, name.find_first_not_of('.'));
-  if (name.size() > 200) name.erase(0, name.size() - 200);  // keeps the extension
-  return !name.empty() && HasImageExtension(name) ? name : std::string();
-}
 
 [[noreturn]] void ThrowWriteError(int error_number) {
   // EFBIG: the process file-size limit (RLIMIT_FSIZE) is a storage limit too.
@@ -236,13 +218,32 @@ nlohmann::json ReadJsonObjectBody(httplib::Response& res, const httplib::Content
   return j;
 }
 
+// A photo job from a complete image set: its folder becomes the job's input, as the folder of
+// a multipart photo upload does.
+static api::Job CreateJobFromImageSet(Context& ctx, const std::string& upload_id, const api::JobOptions& options) {
+  ctx.service.CheckCanQueue();
+  const fs::path folder = ctx.service.NewUploadPath();
+  const api::UploadSession session = ctx.uploads.Take(upload_id, folder);
+  // The set's name when the client gave one, as a multipart photo job's is its photo count.
+  const std::string name = session.filename != "upload" ? session.filename
+                           : session.images.size() == 1 ? session.images.front().name
+                                                        : fmt::format("{} photos", session.images.size());
+  return ctx.service.CreateJob(folder, name, options);
+}
+
 // A job from a complete resumable upload ({"upload_id"}) and optionally its GPS track
 // ({"telemetry_upload_id"}), both consumed.
 static api::Job CreateJobFromUploads(Context& ctx, const nlohmann::json& j, const api::JobOptions& options) {
   const std::string upload_id = j["upload_id"].get<std::string>();
   // Everything that can refuse the request is checked before the upload is consumed: a
   // client told 503 or 400 still has its bytes on the server.
-  ctx.uploads.CompleteDataFile(upload_id);
+  if (ctx.uploads.GetComplete(upload_id).kind == api::UploadKind::kImages) {
+    if (j.contains("telemetry_upload_id")) {
+      throw ApiError(400, "bad_telemetry",
+                     "telemetry goes with a video; photos carry their GPS positions in their EXIF data");
+    }
+    return CreateJobFromImageSet(ctx, upload_id, options);
+  }
   std::string telemetry;
   std::string telemetry_id;
   if (j.contains("telemetry_upload_id")) {
@@ -403,14 +404,13 @@ void HandleCreateJob(Context& ctx, const httplib::Request& req, httplib::Respons
               return false;
             }
             if (!close_photo()) return false;
-            if (photo_names.size() >= kMaxImages) {
-              photo_error = fmt::format("more than {} images in one job", kMaxImages);
+            if (photo_names.size() >= api::kMaxImagesPerJob) {
+              photo_error = fmt::format("more than {} images in one job", api::kMaxImagesPerJob);
               return false;
             }
-            const std::string name = SafeImageName(part.filename);
+            const std::string name = api::SafeImageName(part.filename);
             if (name.empty()) {
-              photo_error = fmt::format("\"{}\" is not named like an image (.jpg, .jpeg, .png, .tif, .tiff, "
-                                        ".bmp, .webp)", part.filename);
+              photo_error = api::NotAnImageNameMessage(part.filename);
               return false;
             }
             if (!photo_names.insert(name).second) {

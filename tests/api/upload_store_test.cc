@@ -1,6 +1,6 @@
 // Resumable upload sessions on disk (api/upload_store.h) without HTTP: offsets, the one-writer
 // rule, the size limit, disk reservations, hand-off to a job, expiry and what survives a
-// reopen (a server restart).
+// reopen (a server restart), for files and for image sets.
 #include "api/upload_store.h"
 
 #include <filesystem>
@@ -159,6 +159,90 @@ TEST(UploadStore, SessionsSurviveAReopenAndExpireAfterTheirLastByte) {
   EXPECT_EQ(reopened.open_sessions(), 0);
 }
 
+// Stores one image of a set whole.
+void PutImage(UploadStore& store, const std::string& id, const std::string& name, const std::string& bytes) {
+  UploadStore::ImageWriter writer = store.PutImage(id, name, static_cast<std::int64_t>(bytes.size()));
+  ASSERT_TRUE(writer.Write(bytes.data(), bytes.size()));
+  writer.Finish();
+}
+
+TEST(UploadStore, AnImageSetKeepsWholeImagesOnlyAndBecomesTheJobsFolder) {
+  const fs::path dir = glam::testing::FreshTempDir("upload_store_images");
+  UploadStore store(Options(dir));
+  const UploadSession created = store.Create(12, "", UploadKind::kImages);
+  EXPECT_EQ(created.kind, UploadKind::kImages);
+  EXPECT_TRUE(created.images.empty());
+  // Not a file: no byte ranges, no telemetry.
+  EXPECT_EQ(CodeOf([&] { store.Append(created.id, 0); }), "wrong_kind");
+
+  PutImage(store, created.id, "DJI_0001.JPG", "aaaa");
+  // A request that breaks inside an image stores nothing of it; the set stays free.
+  {
+    UploadStore::ImageWriter broken = store.PutImage(created.id, "DJI_0002.JPG", 4);
+    EXPECT_EQ(CodeOf([&] { store.PutImage(created.id, "DJI_0003.JPG", 4); }), "upload_busy");
+    ASSERT_TRUE(broken.Write("bb", 2));
+    EXPECT_EQ(CodeOf([&] { broken.Finish(); }), "bad_upload");
+  }
+  {
+    UploadStore::ImageWriter dropped = store.PutImage(created.id, "DJI_0002.JPG", 4);
+    ASSERT_TRUE(dropped.Write("bb", 2));
+  }  // the connection died: never finished
+  UploadSession s = store.Get(created.id);
+  ASSERT_EQ(s.images.size(), 1u);
+  EXPECT_EQ(s.images[0].name, "DJI_0001.JPG");
+  EXPECT_EQ(s.offset, 4);
+  EXPECT_EQ(fs::directory_iterator(dir / "resumable" / (created.id + ".images"))->path().filename(), "DJI_0001.JPG");
+
+  // Refusals: names that are not clean image names, empty images, more than the declared size.
+  EXPECT_EQ(CodeOf([&] { store.PutImage(created.id, "../x.jpg", 4); }), "bad_image");
+  EXPECT_EQ(CodeOf([&] { store.PutImage(created.id, ".hidden.jpg", 4); }), "bad_image");
+  EXPECT_EQ(CodeOf([&] { store.PutImage(created.id, "notes.txt", 4); }), "bad_image");
+  EXPECT_EQ(CodeOf([&] { store.PutImage(created.id, "a.jpg", 0); }), "bad_image");
+  EXPECT_EQ(CodeOf([&] { store.PutImage(created.id, "big.jpg", 9); }), "payload_too_large");
+  EXPECT_EQ(CodeOf([&] { store.Take(created.id, dir / "photos"); }), "upload_incomplete");
+
+  PutImage(store, created.id, "DJI_0002.JPG", "bbbb");
+  // Sent again (the client missed the answer): replaced, not counted twice.
+  PutImage(store, created.id, "DJI_0002.JPG", "BBBB");
+  PutImage(store, created.id, "DJI_0003.JPG", "cccc");
+  s = store.Get(created.id);
+  EXPECT_TRUE(s.complete());
+  EXPECT_EQ(s.images.size(), 3u);
+  EXPECT_EQ(CodeOf([&] { store.CompleteDataFile(created.id); }), "wrong_kind");
+
+  const UploadSession taken = store.Take(created.id, dir / "photos");
+  EXPECT_EQ(taken.images.size(), 3u);
+  EXPECT_EQ(ReadAll(dir / "photos" / "DJI_0001.JPG"), "aaaa");
+  EXPECT_EQ(ReadAll(dir / "photos" / "DJI_0002.JPG"), "BBBB");
+  EXPECT_EQ(ReadAll(dir / "photos" / "DJI_0003.JPG"), "cccc");
+  EXPECT_EQ(StatusOf([&] { store.Get(created.id); }), 404);
+  EXPECT_TRUE(fs::is_empty(dir / "resumable"));
+}
+
+TEST(UploadStore, AnImageSetSurvivesAReopenWithoutTheImageThatWasArriving) {
+  const fs::path dir = glam::testing::FreshTempDir("upload_store_images_reopen");
+  std::string id;
+  {
+    UploadStore store(Options(dir));
+    id = store.Create(8, "survey", UploadKind::kImages).id;
+    PutImage(store, id, "a.jpg", "1234");
+  }
+  // The process stopped inside the second image.
+  std::ofstream(dir / "resumable" / (id + ".images") / ".b.jpg.part") << "56";
+  UploadStore reopened(Options(dir));
+  const UploadSession s = reopened.Get(id);
+  EXPECT_EQ(s.kind, UploadKind::kImages);
+  EXPECT_EQ(s.filename, "survey");
+  EXPECT_EQ(s.offset, 4);
+  EXPECT_FALSE(fs::exists(dir / "resumable" / (id + ".images") / ".b.jpg.part"));
+  PutImage(reopened, id, "b.jpg", "5678");
+  EXPECT_TRUE(reopened.Get(id).complete());
+  // Expired like a file, folder and all.
+  fs::last_write_time(dir / "resumable" / (id + ".images"), fs::file_time_type::clock::now() - 25h);
+  EXPECT_EQ(reopened.RemoveExpired(), 1);
+  EXPECT_TRUE(fs::is_empty(dir / "resumable"));
+}
+
 TEST(UploadStore, OptionsAreChecked) {
   const fs::path dir = glam::testing::FreshTempDir("upload_store_options");
   UploadStoreOptions o = Options(dir);
@@ -187,6 +271,13 @@ TEST(UploadStore, JsonNamesTheOffsetAndTheExpiry) {
   EXPECT_EQ(j["url"], "/api/v1/uploads/0123456789abcdef");
   EXPECT_EQ(j["updated_at"], "1970-01-01T00:33:20.000Z");
   EXPECT_EQ(j["expires_at"], "1970-01-01T01:33:20.000Z");
+  EXPECT_EQ(j["kind"], "file");
+  EXPECT_FALSE(j.contains("images"));
+  s.kind = UploadKind::kImages;
+  s.images = {{"a.jpg", 3}, {"b.jpg", 1}};
+  const nlohmann::json set = UploadToJson(s, std::chrono::hours(1));
+  EXPECT_EQ(set["kind"], "images");
+  EXPECT_EQ(set["images"], nlohmann::json::parse(R"([{"name": "a.jpg", "size": 3}, {"name": "b.jpg", "size": 1}])"));
 }
 
 }  // namespace

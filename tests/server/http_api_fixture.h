@@ -20,6 +20,8 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 #include "api/job_service.h"
 #include "server/http_server.h"
@@ -165,11 +167,11 @@ inline httplib::Result WithFileSizeLimit(rlim_t max_file_bytes, const std::funct
   return res;
 }
 
-// Starts a PATCH of upload `id` on 127.0.0.1:`port` that declares `declared` body bytes but
-// sends only `sent`, and returns the open socket: closing it is a link that dropped mid-body;
+// Starts a request whose head is `head` (request line and headers, without the blank line or
+// Content-Length) declaring `declared` body bytes but sending only `sent`, on
+// 127.0.0.1:`port`, and returns the open socket: closing it is a link that dropped mid-body;
 // keeping it open holds the request (and its upload slot) in the server.
-inline int StartPatch(int port, const std::string& id, std::int64_t offset, const std::string& sent,
-                      std::size_t declared) {
+inline int StartRequest(int port, const std::string& head, const std::string& sent, std::size_t declared) {
   const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
   EXPECT_GE(fd, 0);
   sockaddr_in addr{};
@@ -177,12 +179,28 @@ inline int StartPatch(int port, const std::string& id, std::int64_t offset, cons
   addr.sin_port = htons(static_cast<std::uint16_t>(port));
   addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
   EXPECT_EQ(::connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
-  const std::string request = "PATCH /api/v1/uploads/" + id + " HTTP/1.1\r\nHost: 127.0.0.1\r\n" +
-                              "Content-Type: application/offset+octet-stream\r\nUpload-Offset: " +
-                              std::to_string(offset) + "\r\nContent-Length: " + std::to_string(declared) +
-                              "\r\n\r\n" + sent;
+  const std::string request = head + "Host: 127.0.0.1\r\nContent-Length: " + std::to_string(declared) + "\r\n\r\n" + sent;
   EXPECT_EQ(::send(fd, request.data(), request.size(), 0), static_cast<ssize_t>(request.size()));
   return fd;
+}
+
+// A PATCH of upload `id` from `offset`, as StartRequest.
+inline int StartPatch(int port, const std::string& id, std::int64_t offset, const std::string& sent,
+                      std::size_t declared) {
+  return StartRequest(port,
+                      "PATCH /api/v1/uploads/" + id + " HTTP/1.1\r\nContent-Type: application/offset+octet-stream\r\n" +
+                          "Upload-Offset: " + std::to_string(offset) + "\r\n",
+                      sent, declared);
+}
+
+// A small textured PNG (the real upload probe decodes it).
+inline std::string PngPhoto(int seed) {
+  cv::Mat image(48, 64, CV_8UC3);
+  cv::RNG rng(static_cast<std::uint64_t>(seed));
+  rng.fill(image, cv::RNG::UNIFORM, cv::Scalar::all(0), cv::Scalar::all(255));
+  std::vector<unsigned char> bytes;
+  cv::imencode(".png", image, bytes);
+  return std::string(bytes.begin(), bytes.end());
 }
 
 }  // namespace glam::server

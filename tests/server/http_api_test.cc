@@ -302,16 +302,6 @@ TEST_F(HttpApiTest, TelemetryIsStoredBesideTheVideo) {
   EXPECT_EQ(json::parse(client.Get("/api/v1/jobs")->body)["total"], jobs_before);
 }
 
-// A small textured PNG (the real upload probe decodes it).
-std::string PngPhoto(int seed) {
-  cv::Mat image(48, 64, CV_8UC3);
-  cv::RNG rng(static_cast<std::uint64_t>(seed));
-  rng.fill(image, cv::RNG::UNIFORM, cv::Scalar::all(0), cv::Scalar::all(255));
-  std::vector<unsigned char> bytes;
-  cv::imencode(".png", image, bytes);
-  return std::string(bytes.begin(), bytes.end());
-}
-
 TEST_F(HttpApiTest, PhotosUploadedAsImagesFieldsBecomeAPhotoFolderJob) {
   Start({}, "photos");
   auto client = Client();

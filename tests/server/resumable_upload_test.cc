@@ -1,7 +1,8 @@
 // Resumable uploads over real HTTP (/api/v1/uploads, server/http_resumable_upload.cc): a video
 // sent in chunks becomes a job with exactly its bytes; a PATCH whose connection breaks keeps
 // what arrived, and so does a server restart; every refusal is a documented JSON error that
-// leaves the upload usable.
+// leaves the upload usable. A photo survey sent as an image set, one photo per PUT, becomes a
+// photo job; a photo whose request broke is not kept, the ones before it are.
 #include <unistd.h>
 
 
@@ -251,6 +252,91 @@ TEST_F(ResumableUploadTest, AFullDiskKeepsWhatWasStored) {
   EXPECT_LE(kept, 256 * 1024);
   SendFrom(again, id, bytes, static_cast<std::size_t>(kept), 100 * 1024);
   EXPECT_EQ(OffsetOf(again, id), static_cast<std::int64_t>(bytes.size()));
+}
+
+// PUT /api/v1/uploads/{id}/images/{name} of `bytes`; the answer.
+httplib::Result PutImage(httplib::Client& client, const std::string& id, const std::string& name,
+                         const std::string& bytes, const char* type = "image/png") {
+  return client.Put("/api/v1/uploads/" + id + "/images/" + name, bytes, type);
+}
+
+TEST_F(ResumableUploadTest, APhotoSurveySentAsAnImageSetBecomesAPhotoJob) {
+  Start({}, "resumable_images");
+  auto client = Client();
+  const std::vector<std::string> photos = {PngPhoto(1), PngPhoto(2), PngPhoto(3)};
+  const std::int64_t total = static_cast<std::int64_t>(photos[0].size() + photos[1].size() + photos[2].size());
+  auto res = client.Post("/api/v1/uploads", json{{"kind", "images"}, {"size", total}}.dump(), "application/json");
+  ASSERT_TRUE(res);
+  ASSERT_EQ(res->status, 201) << res->body;
+  const std::string id = json::parse(res->body)["id"];
+  EXPECT_EQ(json::parse(res->body)["kind"], "images");
+  EXPECT_EQ(json::parse(res->body)["images"], json::array());
+
+  res = PutImage(client, id, "DJI_0001.png", photos[0]);
+  ASSERT_TRUE(res);
+  ASSERT_EQ(res->status, 200) << res->body;
+  EXPECT_EQ(json::parse(res->body)["offset"], photos[0].size());
+  // The link drops inside the second photo: nothing of it is kept, the first stays.
+  ::close(StartRequest(port_, "PUT /api/v1/uploads/" + id + "/images/DJI_0002.png HTTP/1.1\r\nContent-Type: image/png\r\n",
+                       photos[1].substr(0, 100), photos[1].size()));
+  // ... and the server restarts.
+  Stop();
+  Launch();
+  auto after = Client();
+  json set;
+  const auto deadline = std::chrono::steady_clock::now() + 10s;
+  do {  // the broken request may still be inside the old server when it stopped
+    res = after.Get("/api/v1/uploads/" + id);
+    ASSERT_TRUE(res);
+    set = json::parse(res->body);
+    if (set["images"].size() != 1) std::this_thread::sleep_for(20ms);
+  } while (set["images"].size() != 1 && std::chrono::steady_clock::now() < deadline);
+  ASSERT_EQ(set["images"].size(), 1u) << res->body;
+  EXPECT_EQ(set["images"][0]["name"], "DJI_0001.png");
+  EXPECT_EQ(set["offset"], photos[0].size());
+  EXPECT_EQ(set["complete"], false);
+
+  // Refusals, none of which stores anything.
+  ExpectError(PutImage(after, id, "notes.txt", "text", "application/octet-stream"), 400, "bad_image", "not an image name");
+  ExpectError(PutImage(after, id, "DJI%200002.png", photos[1]), 400, "bad_image", "a name to clean (a space)");
+  ExpectError(PutImage(after, id, "DJI_0002.png", photos[1], "text/plain"), 415, "unsupported_media_type", "text");
+  ExpectError(PutImage(after, id, "big.png", std::string(static_cast<std::size_t>(total), 'x')), 413,
+              "payload_too_large", "past the declared size");
+  ExpectError(after.Patch("/api/v1/uploads/" + id, {{"Upload-Offset", "0"}}, "x", "application/offset+octet-stream"),
+              409, "wrong_kind", "a byte range of an image set");
+  ExpectError(CreateJobFrom(after, {{"upload_id", id}}), 409, "upload_incomplete", "two photos missing");
+
+  for (std::size_t i = 1; i < photos.size(); ++i) {
+    res = PutImage(after, id, "DJI_000" + std::to_string(i + 1) + ".png", photos[i]);
+    ASSERT_TRUE(res);
+    ASSERT_EQ(res->status, 200) << res->body;
+  }
+  set = json::parse(after.Get("/api/v1/uploads/" + id)->body);
+  EXPECT_EQ(set["complete"], true);
+  const std::string srt_id = Open(after, 5, "a.SRT");
+  SendFrom(after, srt_id, "12345", 0, 5);
+  ExpectError(CreateJobFrom(after, {{"upload_id", id}, {"telemetry_upload_id", srt_id}}), 400, "bad_telemetry",
+              "telemetry with photos");
+  ExpectError(CreateJobFrom(after, {{"upload_id", srt_id}, {"telemetry_upload_id", id}}), 409, "wrong_kind",
+              "an image set as telemetry");
+
+  res = CreateJobFrom(after, {{"upload_id", id}, {"options", {{"name", "survey"}}}});
+  ASSERT_TRUE(res);
+  ASSERT_EQ(res->status, 201) << res->body;
+  const json job = json::parse(res->body);
+  EXPECT_EQ(job["name"], "survey");
+  EXPECT_EQ(job["input"]["images"], 3);
+  EXPECT_EQ(job["input"]["filename"], "3 photos");
+  FollowToEnd(after, job["id"]);
+  const fs::path folder = dir_ / "data" / "jobs" / job["id"].get<std::string>() / api::kImagesFolder;
+  {
+    std::lock_guard lock(ran_mutex_);
+    EXPECT_EQ(ran_input_, folder);  // mapped as a photo folder
+  }
+  for (std::size_t i = 0; i < photos.size(); ++i) {
+    EXPECT_TRUE(glam::testing::ReadFile(folder / ("DJI_000" + std::to_string(i + 1) + ".png")) == photos[i]) << i;
+  }
+  ExpectError(after.Get("/api/v1/uploads/" + id), 404, "not_found", "consumed by the job");
 }
 
 }  // namespace
