@@ -447,10 +447,19 @@ async function main() {
     check(shownParts.length === expectedParts.length && shownParts.every((path, i) => path === expectedParts[i]),
       `job table part links ${JSON.stringify(shownParts)} match the job JSON's parts ${JSON.stringify(expectedParts)}`);
 
-    // 6b. Photos through the same form: several images chosen at once become one photo job.
+    // 6b. Photos through the same form: several images chosen at once become one photo job,
+    // sent as a resumable image set, one PUT per photo under its clean name ("DJI 0003.png"
+    // goes as DJI_0003.png). The link "drops" on the second photo: it is sent again whole.
     const photoFiles = [1, 2, 3].map((i) => ({
-      name: `DJI_000${i}.png`, mimeType: 'image/png', buffer: tinyPng(64, 48, i),
+      name: i === 3 ? 'DJI 0003.png' : `DJI_000${i}.png`, mimeType: 'image/png', buffer: tinyPng(64, 48, i),
     }));
+    const puts = [];
+    await page.route(/\/api\/v1\/uploads\/[0-9a-f]{16}\/images\/[^/?]+/, (route) => {
+      const name = decodeURIComponent(new URL(route.request().url()).pathname.split('/').pop());
+      puts.push(name);
+      if (name === 'DJI_0002.png' && puts.filter((n) => n === name).length === 1) return route.abort('connectionreset');
+      return route.continue();
+    });
     await page.setInputFiles('#video-file', photoFiles);
     check((await page.textContent('#drop-zone .file-name')) === '3 photos', 'the form shows the chosen photos');
     await page.uncheck('#open-after-upload');
@@ -464,6 +473,8 @@ async function main() {
     const photoJob = await api(base, `jobs/${photoJobId}`);
     check(photoJob.input && photoJob.input.images === 3 && photoJob.input.filename === '3 photos',
       `photos uploaded through the page became a photo job: ${JSON.stringify(photoJob.input)}`);
+    check(JSON.stringify(puts) === JSON.stringify(['DJI_0001.png', 'DJI_0002.png', 'DJI_0002.png', 'DJI_0003.png']),
+      `the photos went as an image set, one PUT each under its clean name, the broken one again: ${JSON.stringify(puts)}`);
 
     // 7. A standard 3D Tiles client on the quantized tileset, from a page of the same origin.
     const clientPage = await browser.newPage();

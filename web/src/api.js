@@ -103,31 +103,3 @@ export async function createStreamJob(streamUrl, options) {
 export async function deleteJob(id) {
   await apiFetch(apiUrl(`jobs/${encodeURIComponent(id)}`), { method: 'DELETE' });
 }
-
-// A photo job: every file as an "images" field of one multipart upload, through XHR because
-// fetch has no upload progress (the server maps them in capture order and reads their EXIF
-// GPS). Videos go as resumable uploads (resumable_upload.js). onProgress(fraction in 0..1).
-export function uploadPhotos(files, options, onProgress) {
-  const form = new FormData();
-  for (const file of files) form.append('images', file, file.name);
-  return postJobForm(form, options, onProgress);
-}
-
-function postJobForm(form, options, onProgress) {
-  return new Promise((resolve, reject) => {
-    if (options && Object.keys(options).length > 0) form.append('options', JSON.stringify(options));
-    const xhr = new XMLHttpRequest();
-    xhr.open('POST', apiUrl('jobs'));
-    for (const [k, v] of Object.entries(authHeaders())) xhr.setRequestHeader(k, v);
-    xhr.responseType = 'json';
-    xhr.upload.onprogress = (e) => {
-      if (e.lengthComputable && onProgress) onProgress(e.loaded / e.total);
-    };
-    xhr.onload = () => {
-      if (xhr.status === 201) resolve(xhr.response);
-      else reject(apiError(xhr.status, xhr.response));
-    };
-    xhr.onerror = () => reject(new ApiError(0, 'network', 'network error during upload'));
-    xhr.send(form);
-  });
-}

@@ -1,14 +1,18 @@
-// Sends a video as a resumable upload (docs/api.md, "Resumable uploads"): POST /uploads, then
-// PATCH chunks from the offset the server has, retrying a chunk that failed (the link dropped,
-// the server restarted) after asking the server where it is. The upload's id is remembered in
-// localStorage under the file's name, size and date, so choosing the same file again (after a
-// page reload, or after giving up) goes on from the bytes the server kept instead of byte 0.
+// Resumable uploads (docs/api.md, "Resumable uploads"), so a dropped link or a server restart
+// costs a retry, not the whole upload:
+//  * a video (and its .SRT track): POST /uploads, then PATCH chunks from the offset the server
+//    has, retrying a chunk that failed after asking the server where it is;
+//  * photos: one image set (POST /uploads {kind: "images"}), one PUT per photo, skipping the
+//    photos the set already holds; a photo whose request failed is sent again whole.
+// The upload's id is remembered in localStorage under the files' names, sizes and dates, so
+// choosing the same files again (after a page reload, or after giving up) goes on from what
+// the server kept instead of from the start.
 import { ApiError, apiFetch, apiUrl, authHeaders } from './api.js';
 
 const DEFAULT_CHUNK_BYTES = 16 << 20;
 // Chunk size override (bytes), for tests that want several chunks from a small clip.
 const CHUNK_KEY = 'glam.uploadChunkBytes';
-const MAX_ATTEMPTS = 8;           // consecutive failures of one chunk before giving up
+const MAX_ATTEMPTS = 8;           // consecutive failures of one chunk or photo before giving up
 const MAX_BACKOFF_MS = 30_000;
 
 function chunkBytes() {
@@ -18,6 +22,29 @@ function chunkBytes() {
 
 function sessionKey(file) {
   return `glam.upload.${file.name}|${file.size}|${file.lastModified}`;
+}
+
+// 32-bit FNV-1a of a string, as 8 hex digits (a short localStorage key for a set of photos).
+function fnv1a(text) {
+  let h = 0x811c9dc5;
+  for (let i = 0; i < text.length; i += 1) {
+    h ^= text.charCodeAt(i);
+    h = Math.imul(h, 0x01000193) >>> 0;
+  }
+  return h.toString(16).padStart(8, '0');
+}
+
+function photoSetKey(photos) {
+  const list = photos.map((f) => `${f.name}|${f.size}|${f.lastModified}`).join('\n');
+  return `glam.imageset.${photos.length}.${fnv1a(list)}`;
+}
+
+// The name a photo has in an image set: the server's rule (api/image_names.h): letters,
+// digits, '.', '-' and '_', no leading dot, at most 200 characters (the end kept).
+export function cleanImageName(name) {
+  const base = name.slice(Math.max(name.lastIndexOf('/'), name.lastIndexOf('\\')) + 1);
+  const clean = base.replace(/[^A-Za-z0-9._-]/g, '_').replace(/^\.+/, '');
+  return clean.length > 200 ? clean.slice(clean.length - 200) : clean;
 }
 
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
@@ -32,13 +59,14 @@ async function getUpload(id) {
   return (await apiFetch(apiUrl(`uploads/${encodeURIComponent(id)}`), { cache: 'no-store' })).json();
 }
 
-async function openUpload(file) {
-  const key = sessionKey(file);
+// The upload remembered under `key` when the server still has it and `fits` it, else a new one
+// from `request` ({size, filename, kind}).
+async function openUpload(key, request, fits) {
   const known = localStorage.getItem(key);
   if (known) {
     try {
       const upload = await getUpload(known);
-      if (upload.size === file.size) return upload;
+      if (fits(upload)) return upload;
     } catch (err) {
       if (!(err instanceof ApiError && err.status === 404)) throw err;  // expired or used: a new one
     }
@@ -46,21 +74,20 @@ async function openUpload(file) {
   const response = await apiFetch(apiUrl('uploads'), {
     method: 'POST',
     headers: { 'Content-Type': 'application/json' },
-    body: JSON.stringify({ size: file.size, filename: file.name }),
+    body: JSON.stringify(request),
   });
   const upload = await response.json();
   localStorage.setItem(key, upload.id);
   return upload;
 }
 
-// One PATCH through XHR (fetch has no upload progress). onBytes(bytes of this chunk sent).
-function sendChunk(id, offset, blob, onBytes) {
+// One request with a body through XHR (fetch has no upload progress); resolves with the JSON
+// answer of a 200. onBytes(bytes of this body sent).
+function sendBody(method, url, headers, blob, onBytes) {
   return new Promise((resolve, reject) => {
     const xhr = new XMLHttpRequest();
-    xhr.open('PATCH', apiUrl(`uploads/${encodeURIComponent(id)}`));
-    for (const [k, v] of Object.entries(authHeaders())) xhr.setRequestHeader(k, v);
-    xhr.setRequestHeader('Upload-Offset', String(offset));
-    xhr.setRequestHeader('Content-Type', 'application/offset+octet-stream');
+    xhr.open(method, url);
+    for (const [k, v] of Object.entries({ ...authHeaders(), ...headers })) xhr.setRequestHeader(k, v);
     xhr.responseType = 'json';
     xhr.upload.onprogress = (e) => onBytes(e.loaded);
     xhr.onload = () => {
@@ -76,39 +103,61 @@ function sendChunk(id, offset, blob, onBytes) {
   });
 }
 
-// Uploads `file` completely; returns the upload's id. onProgress(fraction in 0..1, note): note
-// is a message while a chunk is being retried, else ''.
-export async function uploadResumable(file, onProgress = () => {}) {
-  let upload = await openUpload(file);
-  let offset = upload.offset;
-  const chunk = chunkBytes();
-  let failures = 0;
-  onProgress(offset / file.size, offset > 0 ? 'resuming' : '');
-  while (offset < file.size) {
-    const end = Math.min(file.size, offset + chunk);
+// Runs `attempt` until it succeeds: a refusal is thrown at once, other failures are retried
+// with backoff (the note says so) after `recover` (which asks the server where it is), up to
+// MAX_ATTEMPTS in a row; then `giveUp(err)` is thrown.
+async function withRetries(attempt, recover, onNote, giveUp) {
+  for (let failures = 0; ;) {
     try {
-      upload = await sendChunk(upload.id, offset, file.slice(offset, end),
-        (sent) => onProgress((offset + sent) / file.size, ''));
-      offset = upload.offset;
-      failures = 0;
+      return await attempt();
     } catch (err) {
       if (permanent(err)) throw err;
-      if (++failures >= MAX_ATTEMPTS) {
-        throw new Error(`${err.message}; ${Math.round((100 * offset) / file.size)} % are kept on the server, ` +
-          'choose the same file again to go on');
-      }
+      if (++failures >= MAX_ATTEMPTS) throw giveUp(err);
       const wait = Math.min(MAX_BACKOFF_MS, 500 * 2 ** failures);
-      onProgress(offset / file.size, `${err.message}; retrying in ${Math.round(wait / 1000)} s`);
+      onNote(`${err.message}; retrying in ${Math.round(wait / 1000)} s`);
       await sleep(wait);
-      // Where the server is now (it keeps the bytes of a broken chunk).
       try {
-        offset = (await getUpload(upload.id)).offset;
+        await recover();
       } catch (e) {
         if (permanent(e)) throw e;  // gone (expired, deleted): nothing to resume
       }
     }
   }
+}
+
+// Uploads `file` completely; returns the upload's id. onProgress(fraction in 0..1, note): note
+// is a message while a chunk is being retried, else ''.
+export async function uploadResumable(file, onProgress = () => {}) {
+  let upload = await openUpload(sessionKey(file), { size: file.size, filename: file.name },
+    (u) => u.kind !== 'images' && u.size === file.size);
+  let offset = upload.offset;
+  const chunk = chunkBytes();
+  onProgress(offset / file.size, offset > 0 ? 'resuming' : '');
+  const url = apiUrl(`uploads/${encodeURIComponent(upload.id)}`);
+  while (offset < file.size) {
+    const end = Math.min(file.size, offset + chunk);
+    upload = await withRetries(
+      // After a failure the server may hold the whole chunk already (only its answer was lost).
+      () => (offset >= end ? getUpload(upload.id)
+        : sendBody('PATCH', url, { 'Upload-Offset': String(offset), 'Content-Type': 'application/offset+octet-stream' },
+          file.slice(offset, end), (sent) => onProgress((offset + sent) / file.size, ''))),
+      async () => { offset = (await getUpload(upload.id)).offset; },  // it keeps a broken chunk's bytes
+      (note) => onProgress(offset / file.size, note),
+      (err) => new Error(`${err.message}; ${Math.round((100 * offset) / file.size)} % are kept on the server, ` +
+        'choose the same file again to go on'));
+    offset = upload.offset;
+  }
   return upload.id;
+}
+
+async function createJob(body, options) {
+  if (options && Object.keys(options).length > 0) body.options = options;
+  const response = await apiFetch(apiUrl('jobs'), {
+    method: 'POST',
+    headers: { 'Content-Type': 'application/json' },
+    body: JSON.stringify(body),
+  });
+  return response.json();
 }
 
 // The video and its GPS track (a DJI .SRT File or null) as resumable uploads, then the job.
@@ -122,14 +171,45 @@ export async function createJobFromUploads(video, telemetry, options, onProgress
   }
   const body = { upload_id: uploadId };
   if (telemetryId) body.telemetry_upload_id = telemetryId;
-  if (options && Object.keys(options).length > 0) body.options = options;
-  const response = await apiFetch(apiUrl('jobs'), {
-    method: 'POST',
-    headers: { 'Content-Type': 'application/json' },
-    body: JSON.stringify(body),
-  });
+  const job = await createJob(body, options);
   // The uploads are the job's now.
   localStorage.removeItem(sessionKey(video));
   if (telemetry) localStorage.removeItem(sessionKey(telemetry));
-  return response.json();
+  return job;
+}
+
+// Photos as one image set, each photo sent whole unless the set has it already, then the
+// photo job. onProgress(fraction in 0..1, note).
+export async function createJobFromPhotos(photos, options, onProgress) {
+  const names = photos.map((f) => cleanImageName(f.name));
+  const seen = new Map();
+  names.forEach((name, i) => {
+    if (seen.has(name)) throw new Error(`${photos[seen.get(name)].name} and ${photos[i].name} would both be sent as ${name}`);
+    seen.set(name, i);
+  });
+  const total = photos.reduce((sum, f) => sum + f.size, 0);
+  const key = photoSetKey(photos);
+  let set = await openUpload(key, { kind: 'images', size: total },
+    (u) => u.kind === 'images' && u.size === total);
+  const stored = () => new Map((set.images || []).map((image) => [image.name, image.size]));
+  let have = stored();
+  let done = photos.reduce((sum, f, i) => sum + (have.get(names[i]) === f.size ? f.size : 0), 0);
+  onProgress(done / total, done > 0 ? 'resuming' : '');
+  for (let i = 0; i < photos.length; i += 1) {
+    if (have.get(names[i]) === photos[i].size) continue;
+    const url = apiUrl(`uploads/${encodeURIComponent(set.id)}/images/${encodeURIComponent(names[i])}`);
+    const type = photos[i].type && photos[i].type.startsWith('image/') ? photos[i].type : 'application/octet-stream';
+    set = await withRetries(
+      () => (stored().get(names[i]) === photos[i].size ? set  // stored; only the answer was lost
+        : sendBody('PUT', url, { 'Content-Type': type }, photos[i], (sent) => onProgress((done + sent) / total, ''))),
+      async () => { set = await getUpload(set.id); },
+      (note) => onProgress(done / total, `${photos[i].name}: ${note}`),
+      (err) => new Error(`${photos[i].name}: ${err.message}; ${i} of ${photos.length} photos are kept on the server, ` +
+        'choose the same photos again to go on'));
+    have = stored();
+    done += photos[i].size;
+  }
+  const job = await createJob({ upload_id: set.id }, options);
+  localStorage.removeItem(key);  // the set is the job's now
+  return job;
 }

@@ -5,8 +5,8 @@
 // Options follow docs/api.md "Creating a job": `focal` (pixels at the original resolution) or
 // `intrinsics` (an intrinsics.json object); not both.
 
-import { createStreamJob, uploadPhotos } from './api.js';
-import { createJobFromUploads } from './resumable_upload.js';
+import { createStreamJob } from './api.js';
+import { createJobFromPhotos, createJobFromUploads } from './resumable_upload.js';
 
 const isImage = (f) => f.type.startsWith('image/') || /\.(jpe?g|png|tiff?|bmp|webp)$/i.test(f.name);
 
@@ -161,9 +161,10 @@ export function setupUploadPage(root, onCreated) {
         bar.value = fraction;
         status.textContent = `Uploading ${label}: ${Math.round(fraction * 100)} %${note ? ` (${note})` : ''}`;
       };
-      // A video goes as a resumable upload: a dropped link costs a retry, not the whole file.
+      // Resumable: a dropped link costs a retry of a chunk (a video) or of a photo, not the
+      // whole upload.
       const job = input.video ? await createJobFromUploads(input.video, telemetry, options, onProgress)
-                              : await uploadPhotos(input.photos, options, onProgress);
+                              : await createJobFromPhotos(input.photos, options, onProgress);
       bar.value = 1;
       status.textContent = `Job ${job.id} created (${job.state}).`;
       // Before the reset, which would tick "open the map view" again.
