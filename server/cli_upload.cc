@@ -1,17 +1,20 @@
-// `glam upload VIDEO`: sends a video (and its DJI .SRT GPS track, found next to it as `glam
-// map` finds it) to a GLAM server as resumable uploads, creates the job, and with --follow
-// shows its progress until it ends; --download DIR then fetches the results. Exit codes (as
+// `glam upload VIDEO|FOLDER`: sends a video (and its DJI .SRT GPS track, found next to it as
+// `glam map` finds it) to a GLAM server as resumable uploads, or a folder's photos as a
+// resumable image set, creates the job, and with --follow shows its progress until it ends;
+// --download DIR then fetches the results. Exit codes (as
 // every glam command, server/main.cc): 0 job created (or, when followed, completed), 2 bad
 // input or a request the server refused (4xx), 3 server unreachable or failing, or the
 // followed job failed or was canceled.
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <iostream>
 #include <memory>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
@@ -21,6 +24,7 @@
 #include "engine/core/error.h"
 #include "engine/core/logging.h"
 #include "engine/geo/gps_track.h"
+#include "engine/video/image_folder_source.h"
 #include "server/cli_progress.h"
 #include "server/commands.h"
 #include "server/upload_client.h"
@@ -32,7 +36,7 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 struct UploadArgs {
-  std::string video;
+  std::string input;  // a video, or a folder of photos
   std::string gps_path;
   bool no_gps = false;
   std::string name;
@@ -54,6 +58,36 @@ std::string SendFile(UploadClient& client, const fs::path& file, const std::stri
   const std::string label = file.filename().string();
   const std::string id = client.UploadFile(file, upload_id, [&](const UploadProgress& p) {
     if (first_offset < 0) first_offset = p.offset;  // bytes the server had before this run
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double rate = s > 0 ? static_cast<double>(p.offset - first_offset) / s : 0;
+    DrawUploadProgress(label, p.offset, p.size, rate, p.retry, tty);
+  });
+  if (tty) std::cerr << "\n";
+  return id;
+}
+
+// The photos of a folder (not its subfolders), in natural name order; InputError when none.
+std::vector<fs::path> PhotosIn(const fs::path& folder) {
+  std::vector<fs::path> photos;
+  for (const fs::directory_entry& entry : fs::directory_iterator(folder)) {
+    if (entry.is_regular_file() && HasImageExtension(entry.path())) photos.push_back(entry.path());
+  }
+  if (photos.empty()) {
+    throw InputError(fmt::format("{} holds no photos (.jpg, .jpeg, .png, .tif, .tiff, .bmp, .webp)", folder.string()));
+  }
+  std::sort(photos.begin(), photos.end(),
+            [](const fs::path& a, const fs::path& b) { return NaturalLess(a.filename().string(), b.filename().string()); });
+  return photos;
+}
+
+std::string SendPhotos(UploadClient& client, const fs::path& folder, const std::string& upload_id, bool tty) {
+  const std::vector<fs::path> photos = PhotosIn(folder);
+  const auto start = std::chrono::steady_clock::now();
+  std::int64_t first_offset = -1;
+  const std::string label = fmt::format("{} photos", photos.size());
+  const std::string name = fs::absolute(folder).lexically_normal().filename().string();
+  const std::string id = client.UploadImages(photos, name, upload_id, [&](const UploadProgress& p) {
+    if (first_offset < 0) first_offset = p.offset;
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const double rate = s > 0 ? static_cast<double>(p.offset - first_offset) / s : 0;
     DrawUploadProgress(label, p.offset, p.size, rate, p.retry, tty);
@@ -90,8 +124,14 @@ void RunUpload(UploadArgs& args) {
   }
   if (!(args.poll_s >= 0.05 && args.poll_s <= 60)) throw InputError("--poll must be in 0.05..60 seconds");
   args.client.chunk_bytes = static_cast<std::int64_t>(args.chunk_mb * (1 << 20));
-  const fs::path video = args.video;
-  if (!fs::is_regular_file(video)) throw InputError(fmt::format("{} is not a file", video.string()));
+  const fs::path input = args.input;
+  const bool photos = fs::is_directory(input);
+  if (!photos && !fs::is_regular_file(input)) {
+    throw InputError(fmt::format("{} is neither a video file nor a folder of photos", input.string()));
+  }
+  if (photos && !args.gps_path.empty()) {
+    throw InputError("--gps goes with a video; photos carry their GPS positions in their EXIF data");
+  }
   json options = json::object();
   if (!args.options_json.empty()) {
     options = json::parse(args.options_json, nullptr, /*allow_exceptions=*/false);
@@ -102,8 +142,8 @@ void RunUpload(UploadArgs& args) {
   std::optional<fs::path> track;
   if (!args.gps_path.empty()) {
     track = fs::path(args.gps_path);
-  } else if (!args.no_gps) {
-    track = FindGpsSidecar(video);
+  } else if (!args.no_gps && !photos) {
+    track = FindGpsSidecar(input);
   }
   if (track) {
     try {
@@ -119,7 +159,8 @@ void RunUpload(UploadArgs& args) {
 
   const bool tty = isatty(STDERR_FILENO) != 0;
   UploadClient client(args.client);
-  const std::string upload_id = SendFile(client, video, args.upload_id, tty);
+  const std::string upload_id =
+      photos ? SendPhotos(client, input, args.upload_id, tty) : SendFile(client, input, args.upload_id, tty);
   std::string track_id;
   if (track) {
     GLAM_LOG_INFO("sending the GPS track {}", track->string());
@@ -155,9 +196,11 @@ void RegisterUploadCommand(CLI::App& app) {
   auto args = std::make_shared<UploadArgs>();
   CLI::App* cmd = app.add_subcommand(
       "upload",
-      "Send a video to a GLAM server as a resumable upload (a dropped link costs a retry, not the file), create "
-      "the job, and optionally follow it and download the results");
-  cmd->add_option("video", args->video, "Video file")->required();
+      "Send a video (or a folder of photos) to a GLAM server as a resumable upload (a dropped link costs a retry, "
+      "not the file), create the job, and optionally follow it and download the results");
+  cmd->add_option("input", args->input,
+                  "Video file, or a folder of photos (its .jpg/.png/.tif files, sent one by one as an image set)")
+      ->required();
   cmd->add_option("--server", args->client.server, "Server URL (env GLAM_SERVER)")
       ->envname("GLAM_SERVER")
       ->capture_default_str();
@@ -169,9 +212,10 @@ void RegisterUploadCommand(CLI::App& app) {
   cmd->add_option("--options", args->options_json,
                   "Job options as JSON, e.g. '{\"stride\": 2, \"focal\": 1450}' (docs/api.md)");
   cmd->add_option("--upload-id", args->upload_id,
-                  "Continue this upload (from the bytes the server has) instead of opening a new one");
+                  "Continue this upload (from the bytes, or photos, the server has) instead of opening a new one");
   cmd->add_option("--chunk-mb", args->chunk_mb, "Bytes per request (MiB)")->capture_default_str();
-  cmd->add_option("--retries", args->client.max_attempts, "Tries per chunk before giving up")->capture_default_str();
+  cmd->add_option("--retries", args->client.max_attempts, "Tries per chunk (or photo) before giving up")
+      ->capture_default_str();
   cmd->add_flag("--follow", args->follow, "Show the job's progress until it ends (exit 3 unless it completes)");
   cmd->add_option("--download", args->download_dir,
                   "With --follow: write trajectory.tum, points.ply, report.json, graph.json and map.glb here");

@@ -1,12 +1,15 @@
 #include "server/upload_client.h"
 
 #include <algorithm>
+#include <cctype>
 #include <fstream>
+#include <map>
 #include <regex>
 #include <thread>
 
 #include <fmt/format.h>
 
+#include "api/image_names.h"
 #include "engine/core/error.h"
 #include "engine/core/logging.h"
 
@@ -83,11 +86,39 @@ json UploadClient::GetUpload(const std::string& upload_id) {
   return JsonOf(http_->Get(prefix_ + "/api/v1/uploads/" + upload_id), 200, "upload " + upload_id);
 }
 
-std::string UploadClient::OpenUpload(std::int64_t size, const std::string& filename) {
-  const json body = {{"size", size}, {"filename", filename}};
-  const json upload = JsonOf(http_->Post(prefix_ + "/api/v1/uploads", body.dump(), "application/json"), 201,
-                             "opening the upload");
-  return upload.at("id").get<std::string>();
+json UploadClient::OpenUpload(const json& request) {
+  return JsonOf(http_->Post(prefix_ + "/api/v1/uploads", request.dump(), "application/json"), 201,
+                "opening the upload");
+}
+
+void UploadClient::WithRetries(const std::function<void()>& send, const std::function<void()>& recover,
+                               const std::function<void(const std::string&)>& on_retry,
+                               const std::function<std::string(const std::string&, int)>& give_up) {
+  auto backoff = options_.first_backoff;
+  for (int failures = 0;;) {
+    std::string failure;
+    try {
+      send();
+      return;
+    } catch (const api::ApiError& e) {
+      if (!Transient(e)) throw;
+      failure = e.what();
+    } catch (const EnvironmentError& e) {
+      failure = e.what();
+    }
+    if (++failures >= options_.max_attempts) throw EnvironmentError(give_up(failure, failures));
+    GLAM_LOG_WARN("{}; retrying in {:.1f} s", failure, backoff.count() / 1000.0);
+    on_retry(failure);
+    std::this_thread::sleep_for(backoff);
+    backoff = std::min(options_.max_backoff, backoff * 2);
+    try {
+      recover();
+    } catch (const api::ApiError& e) {
+      if (!Transient(e)) throw;  // gone (expired, deleted)
+    } catch (const EnvironmentError&) {
+      // Still unreachable: the next try starts from what was last known.
+    }
+  }
 }
 
 std::string UploadClient::UploadFile(const fs::path& file, const std::string& upload_id,
@@ -101,13 +132,14 @@ std::string UploadClient::UploadFile(const fs::path& file, const std::string& up
   std::string id = upload_id;
   std::int64_t offset = 0;
   if (id.empty()) {
-    id = OpenUpload(size, file.filename().string());
+    id = OpenUpload({{"size", size}, {"filename", file.filename().string()}}).at("id").get<std::string>();
     GLAM_LOG_INFO("upload {} opened for {} ({} bytes)", id, file.string(), size);
   } else {
     const json upload = GetUpload(id);
-    if (upload.value("size", std::int64_t{-1}) != size) {
-      throw InputError(fmt::format("upload {} was opened for {} bytes, {} has {}", id,
-                                   upload.value("size", std::int64_t{-1}), file.string(), size));
+    if (upload.value("kind", "file") != "file" || upload.value("size", std::int64_t{-1}) != size) {
+      throw InputError(fmt::format("upload {} was opened for {} bytes{}, {} has {}", id,
+                                   upload.value("size", std::int64_t{-1}),
+                                   upload.value("kind", "file") != "file" ? " of photos" : "", file.string(), size));
     }
     offset = upload.value("offset", std::int64_t{0});
     GLAM_LOG_INFO("continuing upload {} at byte {} of {}", id, offset, size);
@@ -116,49 +148,138 @@ std::string UploadClient::UploadFile(const fs::path& file, const std::string& up
   if (progress) progress(state);
 
   std::string chunk;
-  int failures = 0;
-  auto backoff = options_.first_backoff;
-  while (offset < size) {
+  // One chunk from the offset the server has (re-read after a failure: it keeps the bytes of
+  // a broken chunk).
+  const auto send = [&] {
+    if (offset >= size) return;
     const std::int64_t n = std::min(options_.chunk_bytes, size - offset);
     chunk.resize(static_cast<std::size_t>(n));
     in.clear();
     in.seekg(offset);
-    if (!in.read(chunk.data(), n)) throw EnvironmentError(fmt::format("cannot read {} at byte {}", file.string(), offset));
-    std::string failure;
-    try {
-      const json upload = JsonOf(http_->Patch(prefix_ + "/api/v1/uploads/" + id,
-                                              {{"Upload-Offset", std::to_string(offset)}}, chunk,
-                                              "application/offset+octet-stream"),
-                                 200, "sending bytes " + std::to_string(offset) + "+");
-      offset = upload.at("offset").get<std::int64_t>();
-      failures = 0;
-      backoff = options_.first_backoff;
-      state = {offset, size, ""};
-      if (progress) progress(state);
-      continue;
-    } catch (const api::ApiError& e) {
-      if (!Transient(e)) throw;
-      failure = e.what();
-    } catch (const EnvironmentError& e) {
-      failure = e.what();
-    }
-    if (++failures >= options_.max_attempts) {
-      throw EnvironmentError(fmt::format("{} (gave up after {} tries; the server keeps the {} bytes it has of "
-                                         "upload {}: continue with --upload-id {})",
-                                         failure, failures, offset, id, id));
-    }
-    GLAM_LOG_WARN("{}; retrying in {:.1f} s", failure, backoff.count() / 1000.0);
-    state.retry = failure;
+    if (!in.read(chunk.data(), n)) throw InputError(fmt::format("cannot read {} at byte {}", file.string(), offset));
+    const json upload = JsonOf(http_->Patch(prefix_ + "/api/v1/uploads/" + id,
+                                            {{"Upload-Offset", std::to_string(offset)}}, chunk,
+                                            "application/offset+octet-stream"),
+                               200, "sending bytes " + std::to_string(offset) + "+");
+    offset = upload.at("offset").get<std::int64_t>();
+  };
+  while (offset < size) {
+    WithRetries(
+        send, [&] { offset = GetUpload(id).at("offset").get<std::int64_t>(); },
+        [&](const std::string& failure) {
+          state.retry = failure;
+          if (progress) progress(state);
+        },
+        [&](const std::string& failure, int tries) {
+          return fmt::format("{} (gave up after {} tries; the server keeps the {} bytes it has of upload {}: "
+                             "continue with --upload-id {})",
+                             failure, tries, offset, id, id);
+        });
+    state = {offset, size, ""};
     if (progress) progress(state);
-    std::this_thread::sleep_for(backoff);
-    backoff = std::min(options_.max_backoff, backoff * 2);
-    try {
-      offset = GetUpload(id).at("offset").get<std::int64_t>();  // what arrived of the failed chunk stays
-    } catch (const api::ApiError& e) {
-      if (!Transient(e)) throw;  // gone (expired, deleted)
-    } catch (const EnvironmentError&) {
-      // Still unreachable: the next PATCH tries again from the last known offset.
+  }
+  return id;
+}
+
+namespace {
+
+// The Content-Type of a photo, by its extension.
+std::string ImageContentType(const fs::path& path) {
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  if (ext == ".jpg" || ext == ".jpeg") return "image/jpeg";
+  if (ext == ".png") return "image/png";
+  if (ext == ".tif" || ext == ".tiff") return "image/tiff";
+  if (ext == ".webp") return "image/webp";
+  if (ext == ".bmp") return "image/bmp";
+  return "application/octet-stream";
+}
+
+// An image set's stored photos: name -> size.
+std::map<std::string, std::int64_t> StoredImages(const json& set) {
+  std::map<std::string, std::int64_t> stored;
+  if (!set.contains("images") || !set["images"].is_array()) return stored;
+  for (const json& image : set["images"]) {
+    stored[image.value("name", "")] = image.value("size", std::int64_t{-1});
+  }
+  return stored;
+}
+
+}  // namespace
+
+std::string UploadClient::UploadImages(const std::vector<fs::path>& photos, const std::string& name,
+                                       const std::string& upload_id,
+                                       const std::function<void(const UploadProgress&)>& progress) {
+  if (photos.empty()) throw InputError("no photos to send");
+  std::vector<std::string> names;
+  std::vector<std::int64_t> sizes;
+  std::map<std::string, fs::path> by_name;
+  std::int64_t total = 0;
+  for (const fs::path& photo : photos) {
+    const std::string clean = api::SafeImageName(photo.filename().string());
+    if (clean.empty()) throw InputError(api::NotAnImageNameMessage(photo.string()));
+    const auto [it, fresh] = by_name.emplace(clean, photo);
+    if (!fresh) {
+      throw InputError(fmt::format("{} and {} would both be sent as {}", it->second.string(), photo.string(), clean));
     }
+    std::error_code ec;
+    const auto size = static_cast<std::int64_t>(fs::file_size(photo, ec));
+    if (ec || size == 0) throw InputError(fmt::format("{} is empty or unreadable", photo.string()));
+    names.push_back(clean);
+    sizes.push_back(size);
+    total += size;
+  }
+  json set;
+  if (upload_id.empty()) {
+    set = OpenUpload({{"kind", "images"}, {"size", total}, {"filename", name}});
+    GLAM_LOG_INFO("image set {} opened for {} photos ({} bytes)", set.at("id").get<std::string>(), photos.size(),
+                  total);
+  } else {
+    set = GetUpload(upload_id);
+    if (set.value("kind", "file") != "images" || set.value("size", std::int64_t{-1}) != total) {
+      throw InputError(fmt::format("upload {} is not an image set of these {} photos ({} bytes)", upload_id,
+                                   photos.size(), total));
+    }
+  }
+  const std::string id = set.at("id").get<std::string>();
+  std::map<std::string, std::int64_t> stored = StoredImages(set);
+  const auto has = [&](std::size_t i) {
+    const auto it = stored.find(names[i]);
+    return it != stored.end() && it->second == sizes[i];
+  };
+  UploadProgress state{0, total, ""};
+  for (std::size_t i = 0; i < photos.size(); ++i) state.offset += has(i) ? sizes[i] : 0;
+  if (!upload_id.empty()) GLAM_LOG_INFO("continuing image set {}: {} of {} bytes there", id, state.offset, total);
+  if (progress) progress(state);
+
+  std::string bytes;
+  for (std::size_t i = 0; i < photos.size(); ++i) {
+    if (has(i)) continue;
+    std::ifstream in(photos[i], std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    if (static_cast<std::int64_t>(bytes.size()) != sizes[i]) {
+      throw InputError(fmt::format("cannot read {} (or it changed while sending)", photos[i].string()));
+    }
+    WithRetries(
+        [&] {
+          if (has(i)) return;  // stored: only the answer to the last try was lost
+          stored = StoredImages(JsonOf(http_->Put(prefix_ + "/api/v1/uploads/" + id + "/images/" + names[i], bytes,
+                                                  ImageContentType(photos[i]).c_str()),
+                                       200, "sending " + photos[i].filename().string()));
+        },
+        [&] { stored = StoredImages(GetUpload(id)); },
+        [&](const std::string& failure) {
+          state.retry = failure;
+          if (progress) progress(state);
+        },
+        [&](const std::string& failure, int tries) {
+          return fmt::format("{} (gave up after {} tries; the server keeps the {} photos image set {} has: "
+                             "continue with --upload-id {})",
+                             failure, tries, stored.size(), id, id);
+        });
+    state.offset += sizes[i];
+    state.retry.clear();
+    if (progress) progress(state);
   }
   return id;
 }

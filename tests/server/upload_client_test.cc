@@ -2,7 +2,7 @@
 // engine: a file in chunks becomes a job whose results download; a chunk refused for a passing
 // reason (the server's upload slots are full) is retried until it goes through; an upload is
 // continued from the bytes the server has; a refusal is not retried; an unreachable server is
-// an environment error.
+// an environment error. Photos go as an image set, continued with the photos the set lacks.
 #include <unistd.h>
 
 #include <fstream>
@@ -130,6 +130,55 @@ TEST_F(UploadClientTest, AnUploadIsContinuedFromTheBytesTheServerHas) {
   // Another file under that id: refused before a byte is sent.
   std::ofstream(dir_ / "other.mp4") << "short";
   EXPECT_THROW(client.UploadFile(dir_ / "other.mp4", id, {}), ApiError);  // consumed by the job: 404
+}
+
+TEST_F(UploadClientTest, PhotosGoAsAnImageSetContinuedWithThePhotosItLacks) {
+  Start({}, "client_photos");
+  const fs::path folder = dir_ / "survey";
+  fs::create_directories(folder);
+  std::vector<fs::path> photos;
+  for (int i = 1; i <= 3; ++i) {
+    photos.push_back(folder / ("DJI 000" + std::to_string(i) + ".png"));  // sent as DJI_000i.png
+    std::ofstream(photos.back(), std::ios::binary) << PngPhoto(i);
+  }
+  std::int64_t total = 0;
+  for (const fs::path& p : photos) total += static_cast<std::int64_t>(fs::file_size(p));
+  // A set that already holds the first photo (an earlier run that broke off).
+  auto http = Client();
+  auto res = http.Post("/api/v1/uploads", json{{"kind", "images"}, {"size", total}}.dump(), "application/json");
+  ASSERT_TRUE(res);
+  const std::string id = json::parse(res->body)["id"];
+  res = http.Put("/api/v1/uploads/" + id + "/images/DJI_0001.png", PngPhoto(1), "image/png");
+  ASSERT_TRUE(res);
+  ASSERT_EQ(res->status, 200) << res->body;
+
+  UploadClient client(ClientOptions());
+  std::vector<std::int64_t> offsets;
+  EXPECT_EQ(client.UploadImages(photos, "survey", id, [&](const UploadProgress& p) { offsets.push_back(p.offset); }),
+            id);
+  const auto first_size = static_cast<std::int64_t>(fs::file_size(photos[0]));
+  // Started at the photo the server had, then one step per photo sent (not the first again).
+  ASSERT_EQ(offsets.size(), 3u);
+  EXPECT_EQ(offsets.front(), first_size);
+  EXPECT_EQ(offsets.back(), total);
+  const json job = client.CreateJob(id, "", json::object());
+  EXPECT_EQ(job["input"]["images"], 3);
+  EXPECT_EQ(FollowToEnd(http, job["id"]).back().data["state"], "completed");
+  {
+    std::lock_guard lock(ran_mutex_);
+    EXPECT_TRUE(glam::testing::ReadFile(ran_input_ / "DJI_0003.png") == PngPhoto(3));
+  }
+  // A new set: opened under the folder's name, which the job takes.
+  const std::string fresh = client.UploadImages(photos, "survey", "", {});
+  EXPECT_EQ(client.CreateJob(fresh, "", json::object())["input"]["filename"], "survey");
+  // Photos that would share a name, or a file that is no image: refused before anything is sent.
+  std::ofstream(folder / "DJI_0001.png", std::ios::binary) << PngPhoto(4);
+  EXPECT_THROW(client.UploadImages({photos[0], folder / "DJI_0001.png"}, "", "", {}), InputError);
+  std::ofstream(folder / "notes.txt") << "x";
+  EXPECT_THROW(client.UploadImages({folder / "notes.txt"}, "", "", {}), InputError);
+  // A video's upload id is not a set of these photos.
+  const std::string video_id = client.UploadFile(video_, "", {});
+  EXPECT_THROW(client.UploadImages(photos, "", video_id, {}), InputError);
 }
 
 TEST_F(UploadClientTest, RefusalsAreNotRetriedAndAnUnreachableServerIsAnEnvironmentError) {
