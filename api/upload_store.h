@@ -14,7 +14,7 @@
 //                never leave the two disagreeing, and nothing needs rewriting per chunk
 //   <id>.images/ an image set's complete images (the offset is the sum of their sizes); an
 //                image being received is ".<name>.part" there until its last byte is synced
-// A session untouched for `expiry` is removed (at startup and whenever a session is created),
+// A session untouched for `expiry` is removed (at startup, whenever a session is created, and by RemoveExpired, which the server calls every 10 minutes),
 // as is a file without its partner.
 //
 // Thread-safety: all methods may be called concurrently; one Appender per session at a time

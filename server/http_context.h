@@ -5,6 +5,8 @@
 
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
+#include <mutex>
 #include <string>
 
 // Engine headers (Eigen) must come before httplib.h: it pulls in <resolv.h>, whose macros
@@ -38,6 +40,10 @@ struct HttpServer::Context {
   std::atomic<int> sse_clients{0};
   std::atomic<int> uploads_in_progress{0};
   std::chrono::steady_clock::time_point started = std::chrono::steady_clock::now();
+  // The expiry sweep of resumable uploads while Run() serves.
+  std::mutex sweep_mutex;
+  std::condition_variable sweep_wake;
+  bool sweep_stop = false;
 };
 using Context = HttpServer::Context;
 

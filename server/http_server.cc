@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <functional>
 #include <regex>
+#include <thread>
 
 #include <fmt/format.h>
 
@@ -223,6 +224,7 @@ void HttpServerOptions::Check() const {
   }
   if (max_concurrent_uploads < 1) throw InputError("--max-concurrent-uploads must be at least 1");
   if (max_open_uploads < 1) throw InputError("--max-open-uploads must be at least 1");
+  if (upload_sweep_interval.count() < 1) throw InputError("the upload sweep interval must be positive");
   if (upload_expiry < std::chrono::minutes(1)) throw InputError("--upload-expiry-hours must be at least 1 minute");
   if (token.find_first_of(" \t\r\n") != std::string::npos) throw InputError("the API token must not contain spaces");
 }
@@ -373,7 +375,32 @@ int HttpServer::Bind() {
   return o.port;
 }
 
-void HttpServer::Run() { server_->listen_after_bind(); }
+void HttpServer::Run() {
+  Context* ctx = context_.get();
+  {
+    std::lock_guard lock(ctx->sweep_mutex);
+    ctx->sweep_stop = false;
+  }
+  std::thread sweeper([ctx] {
+    std::unique_lock lock(ctx->sweep_mutex);
+    while (!ctx->sweep_wake.wait_for(lock, ctx->options.upload_sweep_interval, [ctx] { return ctx->sweep_stop; })) {
+      lock.unlock();
+      try {
+        ctx->uploads.RemoveExpired();
+      } catch (const std::exception& e) {
+        GLAM_LOG_WARN("expired uploads not removed: {}", e.what());
+      }
+      lock.lock();
+    }
+  });
+  server_->listen_after_bind();
+  {
+    std::lock_guard lock(ctx->sweep_mutex);
+    ctx->sweep_stop = true;
+  }
+  ctx->sweep_wake.notify_all();
+  sweeper.join();
+}
 
 void HttpServer::Stop() {
   if (server_) server_->stop();

@@ -39,6 +39,10 @@ struct HttpServerOptions {
   // how long one is kept after its last byte arrived.
   int max_open_uploads = 64;
   std::chrono::seconds upload_expiry = std::chrono::hours(24);
+  // How often expired sessions are removed while the server runs (also at start and whenever
+  // a session is opened): an abandoned multi-GB upload frees its disk within this much of its
+  // expiry even when nobody uploads.
+  std::chrono::milliseconds upload_sweep_interval = std::chrono::minutes(10);
   int http_threads = 64;
   int max_sse_clients = 32;
   std::string cors_origin;          // empty: no CORS headers

@@ -254,6 +254,28 @@ TEST_F(ResumableUploadTest, AFullDiskKeepsWhatWasStored) {
   EXPECT_EQ(OffsetOf(again, id), static_cast<std::int64_t>(bytes.size()));
 }
 
+// An abandoned upload is removed once it expires while the server runs, even when nobody
+// opens another (before, the sweep ran at start and on POST /uploads only, so a multi-GB
+// abandoned upload held its disk until then).
+TEST_F(ResumableUploadTest, AnAbandonedUploadIsRemovedWhileTheServerRuns) {
+  HttpServerOptions options;
+  options.upload_sweep_interval = 50ms;
+  Start(options, "resumable_sweep");
+  auto client = Client();
+  const std::string kept = Open(client, 10, "kept.mp4");
+  const std::string abandoned = Open(client, 10, "abandoned.mp4");
+  SendFrom(client, abandoned, "01234", 0, 5);
+  // Its last byte arrived 25 hours ago (the expiry is 24 h).
+  fs::last_write_time(dir_ / "data" / "resumable" / (abandoned + ".data"), fs::file_time_type::clock::now() - 25h);
+  const auto deadline = std::chrono::steady_clock::now() + 10s;
+  while (fs::exists(dir_ / "data" / "resumable" / (abandoned + ".data")) && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(20ms);
+  }
+  ExpectError(client.Get("/api/v1/uploads/" + abandoned), 404, "not_found", "expired while the server ran");
+  EXPECT_FALSE(fs::exists(dir_ / "data" / "resumable" / (abandoned + ".json")));
+  EXPECT_EQ(OffsetOf(client, kept), 0);  // the fresh one stays
+}
+
 // PUT /api/v1/uploads/{id}/images/{name} of `bytes`; the answer.
 httplib::Result PutImage(httplib::Client& client, const std::string& id, const std::string& name,
                          const std::string& bytes, const char* type = "image/png") {
