@@ -14,8 +14,9 @@
 //                never leave the two disagreeing, and nothing needs rewriting per chunk
 //   <id>.images/ an image set's complete images (the offset is the sum of their sizes); an
 //                image being received is ".<name>.part" there until its last byte is synced
-// A session untouched for `expiry` is removed (at startup, whenever a session is created, and by RemoveExpired, which the server calls every 10 minutes),
-// as is a file without its partner.
+// A session untouched for `expiry` is removed at startup, whenever a session is created, and
+// by RemoveExpired (the server calls it every 10 minutes); a file without its partner is
+// removed at startup.
 //
 // Thread-safety: all methods may be called concurrently; one Appender per session at a time
 // (a second one is refused with 409 "upload_busy" instead of interleaving bytes).
