@@ -96,7 +96,7 @@ void UploadStoreOptions::Check() const {
 
 const char* UploadKindName(UploadKind kind) { return kind == UploadKind::kImages ? "images" : "file"; }
 
-json UploadToJson(const UploadSession& s, std::chrono::seconds expiry) {
+json UploadToJson(const UploadSession& s, std::chrono::seconds expiry, bool list_images) {
   const std::int64_t expires_ms = s.updated_ms + std::chrono::duration_cast<std::chrono::milliseconds>(expiry).count();
   json j = {{"id", s.id},
             {"kind", UploadKindName(s.kind)},
@@ -109,9 +109,12 @@ json UploadToJson(const UploadSession& s, std::chrono::seconds expiry) {
             {"expires_at", FormatTimestamp(expires_ms)},
             {"url", "/api/v1/uploads/" + s.id}};
   if (s.kind == UploadKind::kImages) {
-    json images = json::array();
-    for (const StoredImage& image : s.images) images.push_back({{"name", image.name}, {"size", image.size}});
-    j["images"] = std::move(images);
+    j["image_count"] = s.images.size();
+    if (list_images) {
+      json images = json::array();
+      for (const StoredImage& image : s.images) images.push_back({{"name", image.name}, {"size", image.size}});
+      j["images"] = std::move(images);
+    }
   }
   return j;
 }

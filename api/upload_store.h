@@ -71,8 +71,10 @@ struct UploadSession {
 };
 
 // The session as JSON: id, kind, filename, size, offset, complete, created_at, updated_at,
-// expires_at (ISO 8601 UTC) and url; an image set also its images ([{name, size}]).
-nlohmann::json UploadToJson(const UploadSession& session, std::chrono::seconds expiry);
+// expires_at (ISO 8601 UTC) and url; an image set also image_count and, with `list_images`,
+// its images ([{name, size}]): the answer to a photo's PUT leaves the list out, which for a
+// survey of thousands of photos would otherwise be larger than the photo.
+nlohmann::json UploadToJson(const UploadSession& session, std::chrono::seconds expiry, bool list_images = true);
 
 class UploadStore {
  public:

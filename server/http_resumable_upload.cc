@@ -29,10 +29,11 @@ using api::ApiError;
 
 constexpr const char* kOffsetHeader = "Upload-Offset";
 
-void SendSession(Context& ctx, httplib::Response& res, int status, const api::UploadSession& session) {
+void SendSession(Context& ctx, httplib::Response& res, int status, const api::UploadSession& session,
+                 bool list_images = true) {
   res.set_header(kOffsetHeader, std::to_string(session.offset));
   res.set_header("Cache-Control", "no-store");
-  SendJson(res, status, api::UploadToJson(session, ctx.uploads.options().expiry));
+  SendJson(res, status, api::UploadToJson(session, ctx.uploads.options().expiry, list_images));
 }
 
 // The offset a PATCH claims to start at (400 unless a plain non-negative integer).
@@ -186,7 +187,7 @@ void HandlePutUploadImage(Context& ctx, const httplib::Request& req, httplib::Re
   if (!read_ok || writer->too_large()) res.set_header("Connection", "close");
   const api::UploadSession session = writer->Finish();  // stores it only when every byte arrived
   writer.reset();
-  SendSession(ctx, res, 200, session);
+  SendSession(ctx, res, 200, session, /*list_images=*/false);
 }
 
 }  // namespace glam::server

@@ -263,9 +263,10 @@ std::string UploadClient::UploadImages(const std::vector<fs::path>& photos, cons
     WithRetries(
         [&] {
           if (has(i)) return;  // stored: only the answer to the last try was lost
-          stored = StoredImages(JsonOf(http_->Put(prefix_ + "/api/v1/uploads/" + id + "/images/" + names[i], bytes,
-                                                  ImageContentType(photos[i]).c_str()),
-                                       200, "sending " + photos[i].filename().string()));
+          JsonOf(http_->Put(prefix_ + "/api/v1/uploads/" + id + "/images/" + names[i], bytes,
+                            ImageContentType(photos[i]).c_str()),
+                 200, "sending " + photos[i].filename().string());
+          stored[names[i]] = sizes[i];
         },
         [&] { stored = StoredImages(GetUpload(id)); },
         [&](const std::string& failure) {

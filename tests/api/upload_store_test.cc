@@ -278,6 +278,10 @@ TEST(UploadStore, JsonNamesTheOffsetAndTheExpiry) {
   const nlohmann::json set = UploadToJson(s, std::chrono::hours(1));
   EXPECT_EQ(set["kind"], "images");
   EXPECT_EQ(set["images"], nlohmann::json::parse(R"([{"name": "a.jpg", "size": 3}, {"name": "b.jpg", "size": 1}])"));
+  EXPECT_EQ(set["image_count"], 2);
+  const nlohmann::json brief = UploadToJson(s, std::chrono::hours(1), /*list_images=*/false);
+  EXPECT_FALSE(brief.contains("images"));
+  EXPECT_EQ(brief["image_count"], 2);
 }
 
 }  // namespace

@@ -298,6 +298,8 @@ TEST_F(ResumableUploadTest, APhotoSurveySentAsAnImageSetBecomesAPhotoJob) {
   ASSERT_TRUE(res);
   ASSERT_EQ(res->status, 200) << res->body;
   EXPECT_EQ(json::parse(res->body)["offset"], photos[0].size());
+  EXPECT_EQ(json::parse(res->body)["image_count"], 1);
+  EXPECT_FALSE(json::parse(res->body).contains("images"));  // the list is GET's
   // The link drops inside the second photo: nothing of it is kept, the first stays.
   ::close(StartRequest(port_, "PUT /api/v1/uploads/" + id + "/images/DJI_0002.png HTTP/1.1\r\nContent-Type: image/png\r\n",
                        photos[1].substr(0, 100), photos[1].size()));

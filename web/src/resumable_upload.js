@@ -191,6 +191,8 @@ export async function createJobFromPhotos(photos, options, onProgress) {
   const key = photoSetKey(photos);
   let set = await openUpload(key, { kind: 'images', size: total },
     (u) => u.kind === 'images' && u.size === total);
+  // The set's photos: from the set's list (GET), then kept up to date as photos are stored
+  // (a PUT's answer leaves the list out).
   const stored = () => new Map((set.images || []).map((image) => [image.name, image.size]));
   let have = stored();
   let done = photos.reduce((sum, f, i) => sum + (have.get(names[i]) === f.size ? f.size : 0), 0);
@@ -199,14 +201,14 @@ export async function createJobFromPhotos(photos, options, onProgress) {
     if (have.get(names[i]) === photos[i].size) continue;
     const url = apiUrl(`uploads/${encodeURIComponent(set.id)}/images/${encodeURIComponent(names[i])}`);
     const type = photos[i].type && photos[i].type.startsWith('image/') ? photos[i].type : 'application/octet-stream';
-    set = await withRetries(
-      () => (stored().get(names[i]) === photos[i].size ? set  // stored; only the answer was lost
+    await withRetries(
+      () => (have.get(names[i]) === photos[i].size ? null  // stored; only the answer was lost
         : sendBody('PUT', url, { 'Content-Type': type }, photos[i], (sent) => onProgress((done + sent) / total, ''))),
-      async () => { set = await getUpload(set.id); },
+      async () => { set = await getUpload(set.id); have = stored(); },
       (note) => onProgress(done / total, `${photos[i].name}: ${note}`),
       (err) => new Error(`${photos[i].name}: ${err.message}; ${i} of ${photos.length} photos are kept on the server, ` +
         'choose the same photos again to go on'));
-    have = stored();
+    have.set(names[i], photos[i].size);
     done += photos[i].size;
   }
   const job = await createJob({ upload_id: set.id }, options);
