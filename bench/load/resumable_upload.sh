@@ -3,7 +3,10 @@
 # resumable uploads with `glam upload` at two chunk sizes, and an upload cut halfway (the
 # client killed) and continued with --upload-id. The file is random bytes, so every run ends
 # with the server's 422 (not a video) after the last byte: what is timed is the transfer, the
-# per-chunk fsync and the hand-off, on loopback (no network limit).
+# per-chunk fsync and the hand-off, on loopback (no network limit). Then the same for photos:
+# SIZE_MB in 5 MB "photos" (random bytes named .JPG) as multipart fields against `glam upload
+# FOLDER` (an image set, one PUT per photo), and 2000 photos of 100 kB, where the per-photo
+# cost (a request, an fsync, the set's listing) shows.
 #
 # usage: bench/load/resumable_upload.sh [BUILD_DIR] [SIZE_MB]   (defaults: build, 1000)
 set -euo pipefail
@@ -56,6 +59,29 @@ kept="$(curl -s "$url/api/v1/uploads/$id" | sed -n 's/.*"offset":\([0-9]*\).*/\1
 "$glam" --log-level error upload "$work/flight.bin" --server "$url" --no-gps --upload-id "$id" \
   > /dev/null 2>&1 || true
 report "cut at $((kept / 1000000)) MB, continued (--upload-id)" "$t0" "$(now)"
+
+# Photos: multipart fields in one request against an image set.
+photos() {  # photos DIR COUNT KB
+  mkdir -p "$1"
+  for i in $(seq -w 1 "$2"); do head -c "$(($3 * 1000))" /dev/urandom > "$1/DJI_$i.JPG"; done
+}
+for spec in "$((size_mb / 5)) 5000" "2000 100"; do
+  read -r count kb <<<"$spec"
+  rm -rf "$work/photos" && photos "$work/photos" "$count" "$kb"
+  mb=$((count * kb / 1000))
+  args=()
+  for f in "$work"/photos/*.JPG; do args+=(-F "images=@$f"); done
+  t0=$(now)
+  curl -s -o /dev/null "${args[@]}" "$url/api/v1/jobs"
+  t1=$(now)
+  printf "%-40s %6.2f s  %6s MB/s\n" "$count photos of $kb kB, multipart (curl)" "$(echo "$t1 - $t0" | bc)" \
+    "$(echo "scale=1; $mb / ($t1 - $t0)" | bc)"
+  t0=$(now)
+  "$glam" --log-level error upload "$work/photos" --server "$url" > /dev/null 2>&1 || true  # 422: not JPEGs
+  t1=$(now)
+  printf "%-40s %6.2f s  %6s MB/s  %5.1f ms/photo\n" "$count photos of $kb kB, glam upload FOLDER" \
+    "$(echo "$t1 - $t0" | bc)" "$(echo "scale=1; $mb / ($t1 - $t0)" | bc)" "$(echo "scale=1; 1000 * ($t1 - $t0) / $count" | bc)"
+done
 left="$(ls "$work/data/resumable" | wc -l)"
 echo "files left in DIR/resumable: $left (0: every upload was handed over)"
 

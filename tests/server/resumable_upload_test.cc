@@ -329,6 +329,17 @@ TEST_F(ResumableUploadTest, APhotoSurveySentAsAnImageSetBecomesAPhotoJob) {
   ExpectError(after.Patch("/api/v1/uploads/" + id, {{"Upload-Offset", "0"}}, "x", "application/offset+octet-stream"),
               409, "wrong_kind", "a byte range of an image set");
   ExpectError(CreateJobFrom(after, {{"upload_id", id}}), 409, "upload_incomplete", "two photos missing");
+  const std::string& second = photos[1];
+  ExpectError(after.Put(
+                  "/api/v1/uploads/" + id + "/images/DJI_0002.png",
+                  [&](std::size_t, httplib::DataSink& sink) {
+                    sink.write(second.data(), second.size());
+                    sink.done();
+                    return true;
+                  },
+                  "image/png"),
+              411, "length_required", "a photo sent chunked");
+  EXPECT_EQ(json::parse(after.Get("/api/v1/uploads/" + id)->body)["image_count"], 1);
 
   for (std::size_t i = 1; i < photos.size(); ++i) {
     res = PutImage(after, id, "DJI_000" + std::to_string(i + 1) + ".png", photos[i]);
