@@ -247,6 +247,30 @@ TEST(ServerE2E, PhotoJobIsMappedAndGeoreferencedFromExif) {
   // Exact GPS, so what is left is the map's own error (the clip flies ~100 m up).
   EXPECT_LT(rms, 1.0);
 
+  // The same photos through `glam upload FOLDER`: a resumable image set, one photo per
+  // request, mapped as the same photo job.
+  fs::create_directories(dir / "survey");
+  for (const fs::directory_entry& e : fs::directory_iterator(dir)) {
+    if (e.path().extension() == ".JPG") fs::copy_file(e.path(), dir / "survey" / e.path().filename());
+  }
+  const std::string command = std::string(GLAM_BIN) + " --log-level warn upload " + (dir / "survey").string() +
+                              " --server http://127.0.0.1:" + std::to_string(server.port()) + " --follow --download " +
+                              (dir / "via_cli").string() + " > " + (dir / "cli.txt").string() + " 2> " +
+                              (dir / "cli_err.txt").string();
+  const int status = std::system(command.c_str());
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << glam::testing::ReadFile(dir / "cli_err.txt");
+  const json created = json::parse(glam::testing::ReadFile(dir / "cli.txt"));
+  EXPECT_EQ(created["input"]["images"], frame_of_photo.size());
+  EXPECT_EQ(created["name"], "survey");  // the folder's name
+  const json cli_report = json::parse(glam::testing::ReadFile(dir / "via_cli" / "report.json"));
+  EXPECT_EQ(cli_report["georeference"]["ok"], true);
+  const std::vector<TimedPose> via_cli = ReadTumTrajectory(dir / "via_cli" / "trajectory.tum");
+  EXPECT_EQ(via_cli.size(), mapped.size());
+  EXPECT_LT(glam::testing::UnalignedCentreRms(via_cli, truth, shift, glam::testing::PhotoFrames(frame_of_photo),
+                                              &compared),
+            1.0);
+  EXPECT_TRUE(fs::is_empty(dir / "data" / "resumable"));
+
   server.Signal(SIGTERM);
   EXPECT_EQ(server.Wait(30), 0);
 }
