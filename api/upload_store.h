@@ -144,15 +144,14 @@ class UploadStore {
     ImageWriter& operator=(const ImageWriter&) = delete;
     ~ImageWriter();
 
-    // False when the bytes go past `length` (too_large()) or the disk refused them
-    // (error_number()).
+    // False when the bytes go past `length` (too_large()) or the disk refused them (Finish()
+    // then says why).
     bool Write(const char* data, std::size_t size);
     // Stores the image and returns the session as it now is. ApiError 400 "bad_upload" when
     // fewer than `length` bytes arrived, 507 for a full disk; EnvironmentError otherwise.
     UploadSession Finish();
 
     bool too_large() const { return too_large_; }
-    std::int64_t received() const { return received_; }
 
    private:
     friend class UploadStore;

@@ -193,6 +193,20 @@ inline int StartPatch(int port, const std::string& id, std::int64_t offset, cons
                       sent, declared);
 }
 
+// The job of a POST /jobs answer that must have created a photo job named `name` of `images`
+// photos (an empty object when it did not).
+inline json CreatedPhotoJob(const httplib::Result& res, const std::string& name, std::size_t images) {
+  EXPECT_TRUE(res);
+  if (!res) return json::object();
+  EXPECT_EQ(res->status, 201) << res->body;
+  if (res->status != 201) return json::object();
+  const json job = json::parse(res->body);
+  EXPECT_EQ(job["name"], name);
+  EXPECT_EQ(job["input"]["images"], images);
+  EXPECT_EQ(job["input"]["filename"], std::to_string(images) + " photos");
+  return job;
+}
+
 // A small textured PNG (the real upload probe decodes it).
 inline std::string PngPhoto(int seed) {
   cv::Mat image(48, 64, CV_8UC3);

@@ -311,12 +311,8 @@ TEST_F(HttpApiTest, PhotosUploadedAsImagesFieldsBecomeAPhotoFolderJob) {
       {"images", PngPhoto(3), "DJI 0003.png", "image/png"},
       {"options", R"({"name": "survey"})", "", "application/json"}};
   auto res = client.Post("/api/v1/jobs", items);
-  ASSERT_TRUE(res);
-  ASSERT_EQ(res->status, 201) << res->body;
-  const json job = json::parse(res->body);
-  EXPECT_EQ(job["name"], "survey");
-  EXPECT_EQ(job["input"]["images"], 3);
-  EXPECT_EQ(job["input"]["filename"], "3 photos");
+  const json job = CreatedPhotoJob(res, "survey", 3);
+  ASSERT_TRUE(job.contains("id"));
   EXPECT_EQ(job["input"]["width"], 64);
   const std::string id = job["id"];
   FollowToEnd(client, id);
