@@ -388,7 +388,7 @@ UploadStore::ImageWriter UploadStore::PutImage(const std::string& id, const std:
   std::FILE* file = std::fopen(temp.c_str(), "wb");
   if (file == nullptr) ThrowStorageError(errno, fmt::format("cannot create {}", temp.string()));
   busy_.insert(id);
-  return ImageWriter(this, id, temp, ImagesPath(id) / name, length, file);
+  return ImageWriter(this, s, temp, ImagesPath(id) / name, length, file);
 }
 
 void UploadStore::Release(const std::string& id) {
@@ -455,13 +455,13 @@ UploadSession UploadStore::Appender::Finish() {
 
 namespace glam::api {
 
-UploadStore::ImageWriter::ImageWriter(UploadStore* store, std::string id, fs::path temp, fs::path final_path,
+UploadStore::ImageWriter::ImageWriter(UploadStore* store, UploadSession session, fs::path temp, fs::path final_path,
                                       std::int64_t length, std::FILE* file)
-    : store_(store), id_(std::move(id)), temp_(std::move(temp)), final_(std::move(final_path)), length_(length),
-      file_(file) {}
+    : store_(store), session_(std::move(session)), temp_(std::move(temp)), final_(std::move(final_path)),
+      length_(length), file_(file) {}
 
 UploadStore::ImageWriter::ImageWriter(ImageWriter&& other) noexcept
-    : store_(other.store_), id_(std::move(other.id_)), temp_(std::move(other.temp_)),
+    : store_(other.store_), session_(std::move(other.session_)), temp_(std::move(other.temp_)),
       final_(std::move(other.final_)), length_(other.length_), file_(other.file_), received_(other.received_),
       too_large_(other.too_large_), error_number_(other.error_number_), stored_(other.stored_) {
   other.store_ = nullptr;
@@ -472,7 +472,7 @@ UploadStore::ImageWriter::~ImageWriter() {
   if (store_ == nullptr) return;
   if (file_ != nullptr) std::fclose(file_);
   if (!stored_) RemoveQuietly(temp_);
-  store_->Release(id_);
+  store_->Release(session_.id);
 }
 
 bool UploadStore::ImageWriter::Write(const char* data, std::size_t size) {
@@ -511,7 +511,20 @@ UploadSession UploadStore::ImageWriter::Finish() {
     ::fsync(folder);
     ::close(folder);
   }
-  return store_->Get(id_);
+  // The set now: this image in place of one of its name (the writer held the set: nothing
+  // else changed it).
+  std::vector<StoredImage>& images = session_.images;
+  const auto at = std::lower_bound(images.begin(), images.end(), name,
+                                   [](const StoredImage& i, const std::string& n) { return i.name < n; });
+  if (at != images.end() && at->name == name) {
+    session_.offset -= at->size;
+    at->size = length_;
+  } else {
+    images.insert(at, StoredImage{name, length_});
+  }
+  session_.offset += length_;
+  session_.updated_ms = NowMs();
+  return session_;
 }
 
 }  // namespace glam::api

@@ -155,11 +155,13 @@ class UploadStore {
 
    private:
     friend class UploadStore;
-    ImageWriter(UploadStore* store, std::string id, std::filesystem::path temp, std::filesystem::path final_path,
-                std::int64_t length, std::FILE* file);
+    ImageWriter(UploadStore* store, UploadSession session, std::filesystem::path temp,
+                std::filesystem::path final_path, std::int64_t length, std::FILE* file);
 
     UploadStore* store_;
-    std::string id_;
+    // The set as PutImage read it: Finish() updates it for the stored image rather than
+    // listing the folder again (a second listing per photo for a survey of thousands).
+    UploadSession session_;
     std::filesystem::path temp_;
     std::filesystem::path final_;
     std::int64_t length_;

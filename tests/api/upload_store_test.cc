@@ -159,11 +159,18 @@ TEST(UploadStore, SessionsSurviveAReopenAndExpireAfterTheirLastByte) {
   EXPECT_EQ(reopened.open_sessions(), 0);
 }
 
-// Stores one image of a set whole.
+// Stores one image of a set whole; the set Finish() returns is the one on disk.
 void PutImage(UploadStore& store, const std::string& id, const std::string& name, const std::string& bytes) {
   UploadStore::ImageWriter writer = store.PutImage(id, name, static_cast<std::int64_t>(bytes.size()));
   ASSERT_TRUE(writer.Write(bytes.data(), bytes.size()));
-  writer.Finish();
+  const UploadSession returned = writer.Finish();
+  const UploadSession stored = store.Get(id);
+  EXPECT_EQ(returned.offset, stored.offset);
+  ASSERT_EQ(returned.images.size(), stored.images.size());
+  for (std::size_t i = 0; i < stored.images.size(); ++i) {
+    EXPECT_EQ(returned.images[i].name, stored.images[i].name);
+    EXPECT_EQ(returned.images[i].size, stored.images[i].size);
+  }
 }
 
 TEST(UploadStore, AnImageSetKeepsWholeImagesOnlyAndBecomesTheJobsFolder) {
@@ -201,8 +208,8 @@ TEST(UploadStore, AnImageSetKeepsWholeImagesOnlyAndBecomesTheJobsFolder) {
   EXPECT_EQ(CodeOf([&] { store.PutImage(created.id, "big.jpg", 9); }), "payload_too_large");
   EXPECT_EQ(CodeOf([&] { store.Take(created.id, dir / "photos"); }), "upload_incomplete");
 
-  PutImage(store, created.id, "DJI_0002.JPG", "bbbb");
-  // Sent again (the client missed the answer): replaced, not counted twice.
+  PutImage(store, created.id, "DJI_0002.JPG", "bb");
+  // Sent again (the client missed the answer, or the photo changed): replaced, not counted twice.
   PutImage(store, created.id, "DJI_0002.JPG", "BBBB");
   PutImage(store, created.id, "DJI_0003.JPG", "cccc");
   s = store.Get(created.id);
