@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <chrono>
 #include <filesystem>
+#include <functional>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -52,16 +53,20 @@ struct UploadArgs {
 // The results a completed job offers, as `glam map` writes them.
 constexpr const char* kResults[] = {"trajectory.tum", "points.ply", "report.json", "graph.json", "map.glb"};
 
-std::string SendFile(UploadClient& client, const fs::path& file, const std::string& upload_id, bool tty) {
+// Draws the progress bar of an upload labelled `label`; the rate counts this run's bytes only.
+std::function<void(const UploadProgress&)> ProgressDrawer(std::string label, bool tty) {
   const auto start = std::chrono::steady_clock::now();
-  std::int64_t first_offset = -1;
-  const std::string label = file.filename().string();
-  const std::string id = client.UploadFile(file, upload_id, [&](const UploadProgress& p) {
-    if (first_offset < 0) first_offset = p.offset;  // bytes the server had before this run
+  auto first_offset = std::make_shared<std::int64_t>(-1);
+  return [=](const UploadProgress& p) {
+    if (*first_offset < 0) *first_offset = p.offset;  // bytes the server had before this run
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    const double rate = s > 0 ? static_cast<double>(p.offset - first_offset) / s : 0;
+    const double rate = s > 0 ? static_cast<double>(p.offset - *first_offset) / s : 0;
     DrawUploadProgress(label, p.offset, p.size, rate, p.retry, tty);
-  });
+  };
+}
+
+std::string SendFile(UploadClient& client, const fs::path& file, const std::string& upload_id, bool tty) {
+  const std::string id = client.UploadFile(file, upload_id, ProgressDrawer(file.filename().string(), tty));
   if (tty) std::cerr << "\n";
   return id;
 }
@@ -82,16 +87,11 @@ std::vector<fs::path> PhotosIn(const fs::path& folder) {
 
 std::string SendPhotos(UploadClient& client, const fs::path& folder, const std::string& upload_id, bool tty) {
   const std::vector<fs::path> photos = PhotosIn(folder);
-  const auto start = std::chrono::steady_clock::now();
-  std::int64_t first_offset = -1;
-  const std::string label = fmt::format("{} photos", photos.size());
-  const std::string name = fs::absolute(folder).lexically_normal().filename().string();
-  const std::string id = client.UploadImages(photos, name, upload_id, [&](const UploadProgress& p) {
-    if (first_offset < 0) first_offset = p.offset;
-    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    const double rate = s > 0 ? static_cast<double>(p.offset - first_offset) / s : 0;
-    DrawUploadProgress(label, p.offset, p.size, rate, p.retry, tty);
-  });
+  fs::path normal = fs::absolute(folder).lexically_normal();
+  if (normal.filename().empty()) normal = normal.parent_path();  // "survey/"
+  const std::string name = normal.filename().string();
+  const std::string id = client.UploadImages(photos, name, upload_id,
+                                             ProgressDrawer(fmt::format("{} photos", photos.size()), tty));
   if (tty) std::cerr << "\n";
   return id;
 }
