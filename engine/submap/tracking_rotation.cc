@@ -65,9 +65,27 @@ bool SubmapBuilder::HoveringAt(std::size_t position) const {
   }
   if (depths.empty()) return false;
   const double depth = UpperMedian(std::move(depths));
-  const Eigen::Vector3d first_centre = first.cam_from_submap->Inverse().translation();
-  const Eigen::Vector3d last_centre = last.cam_from_submap->Inverse().translation();
-  const double speed = (last_centre - first_centre).norm() / (last.timestamp_s - first.timestamp_s);
+  // The velocity of a least-squares line through the window's centres, not the difference of
+  // its two ends: PnP of the frames before a loss jitters (the yaw is taking the landmarks out
+  // of view), and two poses alone made a hovering drone look like one flying at 1 m/s (the
+  // stop-and-yaw clip: 0.0116 x the depth per second over the hover before its second yaw).
+  double mean_t = 0;
+  Eigen::Vector3d mean_centre = Eigen::Vector3d::Zero();
+  for (std::size_t p : window) {
+    mean_t += open_.frames[p].timestamp_s;
+    mean_centre += open_.frames[p].cam_from_submap->Inverse().translation();
+  }
+  mean_t /= static_cast<double>(window.size());
+  mean_centre /= static_cast<double>(window.size());
+  double tt = 0;
+  Eigen::Vector3d tc = Eigen::Vector3d::Zero();
+  for (std::size_t p : window) {
+    const double dt = open_.frames[p].timestamp_s - mean_t;
+    tt += dt * dt;
+    tc += dt * (open_.frames[p].cam_from_submap->Inverse().translation() - mean_centre);
+  }
+  if (!(tt > 0)) return false;
+  const double speed = (tc / tt).norm();
   const bool hovering = speed <= options_.hover_max_speed * depth;
   GLAM_LOG_DEBUG("frame {}: camera speed {:.4f} x the median depth per second over frames {}-{} ({})",
                  anchor.index, speed / depth, first.index, last.index, hovering ? "hovering" : "moving");
