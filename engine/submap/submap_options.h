@@ -81,8 +81,9 @@ struct SubmapOptions {
   // A drone that stops and yaws in place with an oblique camera turns its view to ground no
   // landmark covers, and PnP fails. When that happens right after a hover (the camera centre
   // moved less than hover_max_speed x the median landmark depth per second between the posed
-  // frames 0.7 and 0.2 s before, a line fitted through their centres; PnP of the last frames before the loss degrades, measured up
-  // to 0.75 m off), the frame is posed by rotation only: the mean centre of those hover frames,
+  // frames 0.7 and 0.2 s before, by a line fitted through their centres; PnP of the last
+  // frames before the loss degrades, measured up to 0.75 m off), the frame is posed by
+  // rotation only: the mean centre of those hover frames,
   // and the rotation that maps the previous frame's features onto this one's (a pure-rotation
   // fit explaining at least hover_min_rotation_fraction of the descriptor matches to within
   // RotationOnlyOptions::inlier_threshold_px, 1 px). Frame after frame, for at most
