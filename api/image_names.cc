@@ -24,4 +24,12 @@ std::string NotAnImageNameMessage(const std::string& client_name) {
   return fmt::format("\"{}\" is not named like an image (.jpg, .jpeg, .png, .tif, .tiff, .bmp, .webp)", client_name);
 }
 
+std::string UncleanImageNameMessage(const std::string& name) {
+  const std::string clean = SafeImageName(name);
+  if (clean.empty()) return NotAnImageNameMessage(name);
+  if (clean == name) return {};
+  return fmt::format("\"{}\": image names in a set are letters, digits, '.', '-' and '_' only, not starting with "
+                     "'.'; send it as \"{}\"", name, clean);
+}
+
 }  // namespace glam::api

@@ -22,4 +22,9 @@ std::string SafeImageName(const std::string& client_name);
 // The message for a name SafeImageName refuses.
 std::string NotAnImageNameMessage(const std::string& client_name);
 
+// Empty when `name` is already as SafeImageName makes it; otherwise why not, naming the clean
+// form to send instead. An image set checks names rather than changing them: the name a
+// client sends is the one it later finds in the set's list, so it knows what is there.
+std::string UncleanImageNameMessage(const std::string& name);
+
 }  // namespace glam::api

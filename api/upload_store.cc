@@ -370,7 +370,7 @@ UploadStore::ImageWriter UploadStore::PutImage(const std::string& id, const std:
   if (busy_.count(id)) {
     throw ApiError(409, "upload_busy", fmt::format("another request is sending an image of upload {}", id));
   }
-  if (name.empty() || SafeImageName(name) != name) throw ApiError(400, "bad_image", NotAnImageNameMessage(name));
+  if (const std::string why = UncleanImageNameMessage(name); !why.empty()) throw ApiError(400, "bad_image", why);
   if (length < 1) throw ApiError(400, "bad_image", fmt::format("image \"{}\" is empty", name));
   const auto same = std::find_if(s.images.begin(), s.images.end(), [&](const StoredImage& i) { return i.name == name; });
   const std::int64_t replaced = same != s.images.end() ? same->size : 0;

@@ -19,7 +19,6 @@
 
 #include "api/api_error.h"
 #include "api/ids.h"
-#include "api/image_names.h"
 #include "server/http_context.h"
 
 namespace glam::server {
@@ -162,15 +161,6 @@ void HandlePutUploadImage(Context& ctx, const httplib::Request& req, httplib::Re
     if (media_type.rfind("image/", 0) != 0 && media_type != "application/octet-stream") {
       throw ApiError(415, "unsupported_media_type",
                      fmt::format("send the photo as image/* or application/octet-stream, not \"{}\"", content_type));
-    }
-    // Names are checked, not changed: the name a client sends is the one it later finds in
-    // the set's list, so it knows what is there.
-    const std::string clean = api::SafeImageName(name);
-    if (clean.empty()) throw ApiError(400, "bad_image", api::NotAnImageNameMessage(name));
-    if (clean != name) {
-      throw ApiError(400, "bad_image",
-                     fmt::format("\"{}\": image names in a set are letters, digits, '.', '-' and '_' only, not "
-                                 "starting with '.'; send it as \"{}\"", name, clean));
     }
     if (!req.has_header("Content-Length") || req.get_header_value("Transfer-Encoding") == "chunked") {
       throw ApiError(411, "length_required", "send each photo with a Content-Length (not chunked)");

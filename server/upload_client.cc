@@ -148,6 +148,9 @@ std::string UploadClient::UploadFile(const fs::path& file, const std::string& up
   if (progress) progress(state);
 
   std::string chunk;
+  // A file that shrinks while it is sent: not retried, and an EnvironmentError (exit 3) like
+  // any failure of the machine mid-run, not an InputError (the file was fine when checked).
+  std::string read_failure;
   // One chunk from the offset the server has (re-read after a failure: it keeps the bytes of
   // a broken chunk).
   const auto send = [&] {
@@ -156,7 +159,10 @@ std::string UploadClient::UploadFile(const fs::path& file, const std::string& up
     chunk.resize(static_cast<std::size_t>(n));
     in.clear();
     in.seekg(offset);
-    if (!in.read(chunk.data(), n)) throw InputError(fmt::format("cannot read {} at byte {}", file.string(), offset));
+    if (!in.read(chunk.data(), n)) {
+      read_failure = fmt::format("cannot read {} at byte {}", file.string(), offset);
+      return;
+    }
     const json upload = JsonOf(http_->Patch(prefix_ + "/api/v1/uploads/" + id,
                                             {{"Upload-Offset", std::to_string(offset)}}, chunk,
                                             "application/offset+octet-stream"),
@@ -175,6 +181,7 @@ std::string UploadClient::UploadFile(const fs::path& file, const std::string& up
                              "continue with --upload-id {})",
                              failure, tries, offset, id, id);
         });
+    if (!read_failure.empty()) throw EnvironmentError(read_failure);
     state = {offset, size, ""};
     if (progress) progress(state);
   }

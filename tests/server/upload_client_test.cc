@@ -1,8 +1,8 @@
 // `glam upload`'s client (server/upload_client.h) against the real HTTP server with a fake
 // engine: a file in chunks becomes a job whose results download; a chunk refused for a passing
 // reason (the server's upload slots are full) is retried until it goes through; an upload is
-// continued from the bytes the server has; a refusal is not retried; an unreachable server is
-// an environment error. Photos go as an image set, continued with the photos the set lacks.
+// continued from the bytes the server has; a refusal is not retried; an unreachable server and
+// a file that shrinks while it is sent are environment errors. Photos go as an image set, continued with the photos the set lacks.
 #include <unistd.h>
 
 #include <fstream>
@@ -202,6 +202,22 @@ TEST_F(UploadClientTest, RefusalsAreNotRetriedAndAnUnreachableServerIsAnEnvironm
     EXPECT_EQ(e.status(), 404);
   }
   EXPECT_THROW(client.UploadFile(dir_ / "missing.mp4", "", {}), InputError);
+  // A file that shrinks while it is sent: the machine failed mid-run (not retried).
+  const fs::path shrinking = dir_ / "shrinking.mp4";
+  fs::copy_file(video_, shrinking);
+  std::vector<UploadProgress> seen;
+  try {
+    client.UploadFile(shrinking, "", [&](const UploadProgress& p) {
+      seen.push_back(p);
+      if (p.offset > 0) fs::resize_file(shrinking, 100);
+    });
+    ADD_FAILURE() << "a file cut while it was sent went through";
+  } catch (const EnvironmentError& e) {
+    EXPECT_NE(std::string(e.what()).find("cannot read"), std::string::npos) << e.what();
+  }
+  ASSERT_EQ(seen.size(), 2u);  // the start, one chunk; no retry
+  EXPECT_EQ(seen[1].offset, 4096);
+  EXPECT_TRUE(seen[1].retry.empty());
 
   UploadClientOptions nowhere = ClientOptions();
   const int port = port_;

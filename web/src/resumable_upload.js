@@ -8,6 +8,7 @@
 // choosing the same files again (after a page reload, or after giving up) goes on from what
 // the server kept instead of from the start.
 import { ApiError, apiFetch, apiUrl, authHeaders } from './api.js';
+import { cleanImageName } from './image_names.js';
 
 const DEFAULT_CHUNK_BYTES = 16 << 20;
 // Chunk size override (bytes), for tests that want several chunks from a small clip.
@@ -37,14 +38,6 @@ function fnv1a(text) {
 function photoSetKey(photos) {
   const list = photos.map((f) => `${f.name}|${f.size}|${f.lastModified}`).join('\n');
   return `glam.imageset.${photos.length}.${fnv1a(list)}`;
-}
-
-// The name a photo has in an image set: the server's rule (api/image_names.h): letters,
-// digits, '.', '-' and '_', no leading dot, at most 200 characters (the end kept).
-export function cleanImageName(name) {
-  const base = name.slice(Math.max(name.lastIndexOf('/'), name.lastIndexOf('\\')) + 1);
-  const clean = base.replace(/[^A-Za-z0-9._-]/g, '_').replace(/^\.+/, '');
-  return clean.length > 200 ? clean.slice(clean.length - 200) : clean;
 }
 
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
