@@ -135,7 +135,7 @@ void SubmapBuilder::Process(FrameRecord record, std::vector<Submap>* completed) 
     }
     restart.push_back(std::move(lost));
     if (static_cast<int>(open_.keyframes.size()) >= 3) {
-      completed->push_back(Complete());
+      if (std::optional<Submap> submap = Complete()) completed->push_back(std::move(*submap));
     } else {
       ++stats_.submaps_discarded;
     }
@@ -305,7 +305,7 @@ std::vector<Submap> SubmapBuilder::Finish() {
     }
   }
   if (open_.bootstrapped && static_cast<int>(open_.keyframes.size()) >= 3) {
-    completed.push_back(Complete());
+    if (std::optional<Submap> submap = Complete()) completed.push_back(std::move(*submap));
   } else if (!open_.frames.empty()) {
     ++stats_.submaps_discarded;
     GLAM_LOG_INFO("end of input: open submap with {} keyframes and {} frames discarded",
@@ -332,7 +332,7 @@ void SubmapBuilder::HandOffOverlap(std::vector<Submap>* completed) {
       options_.extend_short_final_submap && !open_.keyframe_frame_positions.empty()
           ? std::min(open_.keyframe_frame_positions[open_.keyframe_frame_positions.size() / 2], first_position)
           : first_position;
-  completed->push_back(Complete());
+  if (std::optional<Submap> submap = Complete()) completed->push_back(std::move(*submap));
   // Complete() is done with the frames: the tail and the overlap are moved out, not copied
   // (features are ~270 KB per frame); their poses and matches are reset when re-tracked.
   const auto begin = std::make_move_iterator(open_.frames.begin());

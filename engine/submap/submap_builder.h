@@ -37,7 +37,7 @@ struct SubmapBuilderStats {
   std::int64_t frames_tracked = 0;   // posed by tracking (before relocalisation)
   std::int64_t keyframes = 0;        // over all submaps
   std::int64_t submaps_completed = 0;
-  std::int64_t submaps_discarded = 0;  // closed with < 3 keyframes
+  std::int64_t submaps_discarded = 0;  // closed with < 3 keyframes, or no map after completion
   std::int64_t tracking_losses = 0;
   // Tracked frames whose guided matching around the predicted pose failed, so they were
   // matched against every landmark of the open submap (25-70 ms each; posed or not).
@@ -305,7 +305,14 @@ class SubmapBuilder {
   void UpdateFocalEstimate();
 
   // submap_completion.cc
-  Submap Complete();
+  // The open submap as a finished Submap, or nullopt (counted in submaps_discarded) when the
+  // completion filters leave it fewer landmarks than tracking needs to pose one frame
+  // (SubmapOptions::min_tracking_inliers): such a submap is no map. Seen after a hovering yaw,
+  // where a submap bootstrapped between a frame before the yaw and one after it (74 landmarks
+  // at an apparent 6.4 degrees) kept keyframes only a few frames apart until tracking was lost;
+  // the adjustments then showed the true parallax (under 1 degree) and the weak-triangulation
+  // filter removed every landmark, leaving a 27-frame part with no points.
+  std::optional<Submap> Complete();
   // Relocalises frames by PnP against the final landmarks; frames whose position in `frames`
   // is in `keep` (already refined) are left as they are.
   void RelocaliseFrames(const std::vector<bool>& keep = {});

@@ -216,12 +216,24 @@ void SubmapBuilder::CheckFixedFocal() {
                 fixed.final_rms_pixels, free.final_rms_pixels, fixed.seconds + free.seconds);
 }
 
-Submap SubmapBuilder::Complete() {
+std::optional<Submap> SubmapBuilder::Complete() {
   const Camera camera = CurrentCamera();
   const std::size_t before = open_.landmarks.size();
-  RemoveReprojectionOutliers(camera.intrinsics(), open_.keyframes, open_.landmarks, options_.outlier_filter);
-  RemoveIsolatedLandmarks(open_.landmarks, options_.outlier_filter);  // all of them, as in the paper
-  RemoveWeaklyTriangulatedLandmarks(open_.keyframes, open_.landmarks, options_.outlier_filter);
+  const std::size_t reprojection =
+      RemoveReprojectionOutliers(camera.intrinsics(), open_.keyframes, open_.landmarks, options_.outlier_filter);
+  const std::size_t isolated =
+      RemoveIsolatedLandmarks(open_.landmarks, options_.outlier_filter);  // all of them, as in the paper
+  const std::size_t weak = RemoveWeaklyTriangulatedLandmarks(open_.keyframes, open_.landmarks, options_.outlier_filter);
+  GLAM_LOG_DEBUG("completion filters: {} landmarks, {} reprojection outliers, {} isolated, {} weakly triangulated",
+                 before, reprojection, isolated, weak);
+  if (static_cast<int>(open_.landmarks.size()) < options_.min_tracking_inliers) {
+    ++stats_.submaps_discarded;
+    GLAM_LOG_INFO("submap of frames {}-{} discarded: {} of its {} landmarks are left after the completion filters, "
+                  "fewer than posing a frame needs ({}); its frames stay unposed",
+                  open_.frames.front().index, open_.frames.back().index, open_.landmarks.size(), before,
+                  options_.min_tracking_inliers);
+    return std::nullopt;
+  }
   const std::vector<bool> refined = RefineWithTrackedFrames();
   if (std::find(refined.begin(), refined.end(), true) != refined.end()) {
     // The completion BA moved the landmarks: filter 1 once more on their final positions.

@@ -115,6 +115,14 @@ TEST(HoverYaw, YawsToUnseenGroundArePosedByRotationOnly) {
   EXPECT_EQ(rotation_only("no_rotation_only"), 0);
   EXPECT_GT(rotation_only("default"), 90);
   EXPECT_LT(rotation_only("default"), 300);
+  // The submap bootstrapped across the second yaw (frames 576-641: a frame before the yaw and
+  // one after it) was left without landmarks by its completion filters and is discarded
+  // instead of becoming a part of the flight without points (it did, before 2026-12-07).
+  std::ifstream in(OutDir("default") / "report.json");
+  const nlohmann::json report = nlohmann::json::parse(in);
+  EXPECT_EQ(report.at("disconnected_submaps").get<int>(), 0);
+  EXPECT_GE(report.at("submaps_discarded").get<int>(), 1);
+  EXPECT_FALSE(fs::exists(OutDir("default") / "parts"));
 }
 
 }  // namespace
