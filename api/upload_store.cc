@@ -164,6 +164,7 @@ void UploadStore::RemoveFilesLocked(const std::string& id) const {
   RemoveQuietly(MetaPath(id));
   RemoveQuietly(DataPath(id));
   RemoveQuietly(ImagesPath(id));
+  image_lists_.erase(id);
 }
 
 UploadSession UploadStore::LoadLocked(const std::string& id) const {
@@ -176,7 +177,10 @@ UploadSession UploadStore::LoadLocked(const std::string& id) const {
     return ApiError(404, "not_found", fmt::format("no upload with id {} (it may have expired)", id));
   };
   std::int64_t meta_size = 0, meta_mtime = 0;
-  if (!StatFile(MetaPath(id), &meta_size, &meta_mtime)) throw not_found();
+  if (!StatFile(MetaPath(id), &meta_size, &meta_mtime)) {
+    image_lists_.erase(id);
+    throw not_found();
+  }
   std::ifstream in(MetaPath(id));
   std::stringstream text;
   text << in.rdbuf();
@@ -194,8 +198,13 @@ UploadSession UploadStore::LoadLocked(const std::string& id) const {
   }
   // An image set: its folder's time changes as an image starts and as it is stored.
   std::int64_t folder_size = 0;
-  if (!StatFile(ImagesPath(id), &folder_size, &s.updated_ms)) throw not_found();
-  s.images = ListImages(ImagesPath(id));
+  if (!StatFile(ImagesPath(id), &folder_size, &s.updated_ms)) {
+    image_lists_.erase(id);
+    throw not_found();
+  }
+  auto listed = image_lists_.find(id);
+  if (listed == image_lists_.end()) listed = image_lists_.emplace(id, ListImages(ImagesPath(id))).first;
+  s.images = listed->second;
   for (const StoredImage& image : s.images) s.offset += image.size;
   return s;
 }
@@ -322,6 +331,7 @@ UploadSession UploadStore::Take(const std::string& id, const fs::path& destinati
   fs::rename(s.kind == UploadKind::kImages ? ImagesPath(id) : DataPath(id), destination, ec);
   if (ec) throw EnvironmentError(fmt::format("cannot move upload {}: {}", id, ec.message()));
   RemoveQuietly(MetaPath(id));
+  image_lists_.erase(id);
   GLAM_LOG_INFO("upload {} complete ({} bytes{}), handed to a job", id, s.size,
                 s.kind == UploadKind::kImages ? fmt::format(", {} images", s.images.size()) : std::string());
   return s;
@@ -394,6 +404,20 @@ UploadStore::ImageWriter UploadStore::PutImage(const std::string& id, const std:
 void UploadStore::Release(const std::string& id) {
   std::lock_guard lock(mutex_);
   busy_.erase(id);
+}
+
+void UploadStore::ImageStored(const std::string& id, const StoredImage& image) {
+  std::lock_guard lock(mutex_);
+  const auto listed = image_lists_.find(id);
+  if (listed == image_lists_.end()) return;  // listed from the folder when next read
+  std::vector<StoredImage>& images = listed->second;
+  const auto at = std::lower_bound(images.begin(), images.end(), image.name,
+                                   [](const StoredImage& i, const std::string& n) { return i.name < n; });
+  if (at != images.end() && at->name == image.name) {
+    at->size = image.size;
+  } else {
+    images.insert(at, image);
+  }
 }
 
 UploadStore::Appender::Appender(UploadStore* store, UploadSession session, std::FILE* file)
@@ -524,6 +548,7 @@ UploadSession UploadStore::ImageWriter::Finish() {
   }
   session_.offset += length_;
   session_.updated_ms = NowMs();
+  store_->ImageStored(session_.id, StoredImage{name, length_});
   return session_;
 }
 

@@ -26,6 +26,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <mutex>
 #include <set>
 #include <string>
@@ -212,10 +213,17 @@ class UploadStore {
   UploadSession LoadCompleteLocked(const std::string& id) const;
   std::vector<UploadSession> ListLocked() const;
   void Release(const std::string& id);
+  // An ImageWriter stored `image` in set `id`: the set's list in image_lists_ learns it.
+  void ImageStored(const std::string& id, const StoredImage& image);
 
   UploadStoreOptions options_;
   mutable std::mutex mutex_;
   std::set<std::string> busy_;  // sessions with an Appender
+  // Each image set's stored images, listed from its folder once (the first time it is read
+  // after a start) and then kept up to date by the store, the folder's only writer. Reading
+  // the folder on every request (a stat per image) cost a set of 2000 photos ~3 ms per PUT,
+  // growing with the set, and every upload opened re-read every open set.
+  mutable std::map<std::string, std::vector<StoredImage>> image_lists_;
 };
 
 }  // namespace glam::api
