@@ -293,6 +293,10 @@ BundleAdjustmentOptions GlobalRefinementOptions::DefaultBundleAdjustment() {
   options.refine_k1 = false;
   options.fixed_keyframes = 1;
   options.fix_scale = true;
+  // It runs after the input has ended, when the decoding and feature threads are done: both
+  // cores of the reference machine are free (loop benchmark video: 2.75 s -> 2.1-2.2 s, the
+  // same map; the sparse Cholesky of the reduced system stays single-threaded).
+  options.num_threads = 2;
   return options;
 }
 
