@@ -273,13 +273,20 @@ json JobToJson(const Job& job, const std::string& api_base) {
                {"graph", base + "/graph.json"},
                {"tileset", base + "/tileset.json"},
                {"map_glb", base + "/map.glb"},
+               {"colmap_cameras", base + "/colmap/cameras.txt"},
+               {"colmap_images", base + "/colmap/images.txt"},
+               {"colmap_points3D", base + "/colmap/points3D.txt"},
                {"viewer", "/?job=" + job.id}};
   json parts = json::array();
   for (const json& stored : job.parts) {
     if (!stored.is_object() || !stored.contains("part") || !stored["part"].is_number_integer()) continue;
     json part = stored;
     const std::string dir = base + "/parts/" + std::to_string(stored["part"].get<int>());
-    part["urls"] = {{"trajectory", dir + "/trajectory.tum"}, {"points", dir + "/points.ply"}};
+    part["urls"] = {{"trajectory", dir + "/trajectory.tum"},
+                    {"points", dir + "/points.ply"},
+                    {"colmap_cameras", dir + "/colmap/cameras.txt"},
+                    {"colmap_images", dir + "/colmap/images.txt"},
+                    {"colmap_points3D", dir + "/colmap/points3D.txt"}};
     parts.push_back(std::move(part));
   }
   json input = job.input_info;

@@ -70,6 +70,11 @@ void RemoveQuietly(const fs::path& path) {
 
 // parts/<n>/trajectory.tum or parts/<n>/points.ply: a disconnected part of a completed job's
 // flight, written on its own (report.json "parts").
+// The COLMAP text model of the map's keyframes and landmarks (engine/export/colmap_model.h).
+const std::set<std::string> kColmapFiles = {"colmap/cameras.txt", "colmap/images.txt", "colmap/points3D.txt"};
+const std::set<std::string> kPartFiles = {"trajectory.tum", "points.ply", "colmap/cameras.txt", "colmap/images.txt",
+                                          "colmap/points3D.txt"};
+
 fs::path PartFile(const fs::path& dir, const std::string& id, const std::string& name) {
   constexpr std::size_t kPrefix = 6;  // "parts/"
   const std::size_t slash = name.find('/', kPrefix);
@@ -77,10 +82,10 @@ fs::path PartFile(const fs::path& dir, const std::string& id, const std::string&
   long long number = 0;
   if (slash == std::string::npos ||
       !ParseNonNegativeInt(std::string_view(name).substr(kPrefix, slash - kPrefix), &number) ||
-      number < 1 || (file != "trajectory.tum" && file != "points.ply")) {
+      number < 1 || kPartFiles.count(file) == 0) {
     throw ApiError(400, "bad_request",
-                   "part files are parts/<part number>/trajectory.tum or parts/<part number>/points.ply, "
-                   "parts numbered from 1");
+                   "part files are parts/<part number>/trajectory.tum, points.ply or colmap/{cameras,images,"
+                   "points3D}.txt, parts numbered from 1");
   }
   const fs::path path = dir / "parts" / std::to_string(number) / file;
   if (!fs::is_regular_file(path)) {
@@ -389,7 +394,7 @@ fs::path JobService::ResultFile(const std::string& id, const std::string& name) 
                                                   "report.json", "graph.json"};
   const fs::path dir = JobDir(id);
   const bool part = name.rfind("parts/", 0) == 0;
-  if (kWholeMap.count(name) != 0 || part) {
+  if (kWholeMap.count(name) != 0 || kColmapFiles.count(name) != 0 || part) {
     if (job.state != JobState::kCompleted) {
       throw ApiError(409, "not_ready",
                      fmt::format("{} is produced when the job completes; job {} is {}", name, id,

@@ -149,8 +149,8 @@ void RegisterMapCommand(CLI::App& app) {
   auto args = std::make_shared<MapArgs>();
   CLI::App* cmd = app.add_subcommand(
       "map", "Build submaps, align them (loop closure) and write trajectory.tum, points.ply, "
-             "report.json and graph.json from a video, image folder or live stream (parts of the flight that "
-             "cannot be linked to the map: parts/<n>/trajectory.tum and points.ply)");
+             "report.json, graph.json and colmap/ (the map as a COLMAP sparse model) from a video, image folder "
+             "or live stream (parts of the flight that cannot be linked to the map: parts/<n>/)");
   cmd->add_option("input", args->input,
                   "Video file (anything FFmpeg decodes: MP4/MOV/MKV/TS/AVI, H.264/H.265/VP9/AV1/ProRes), "
                   "folder of images, or a live stream: an rtsp://, rtmp://, srt://, udp://, rtp://, "

@@ -51,7 +51,9 @@ struct UploadArgs {
 };
 
 // The results a completed job offers, as `glam map` writes them.
-constexpr const char* kResults[] = {"trajectory.tum", "points.ply", "report.json", "graph.json", "map.glb"};
+constexpr const char* kResults[] = {"trajectory.tum",     "points.ply",        "report.json",
+                                    "graph.json",         "map.glb",           "colmap/cameras.txt",
+                                    "colmap/images.txt",  "colmap/points3D.txt"};
 
 // Draws the progress bar of an upload labelled `label`; the rate counts this run's bytes only.
 std::function<void(const UploadProgress&)> ProgressDrawer(std::string label, bool tty) {
@@ -184,7 +186,11 @@ void RunUpload(UploadArgs& args) {
                            done["progress"].value("points", 0), client.UrlOf("/?job=" + job_id));
   if (!args.download_dir.empty()) {
     for (const char* name : kResults) {
-      client.Download(job_id, name, fs::path(args.download_dir) / name);
+      const fs::path destination = fs::path(args.download_dir) / name;
+      std::error_code ec;
+      fs::create_directories(destination.parent_path(), ec);
+      if (ec) throw EnvironmentError(fmt::format("cannot create {}: {}", destination.parent_path().string(), ec.message()));
+      client.Download(job_id, name, destination);
     }
     std::cerr << fmt::format("glam upload: results in {}\n", args.download_dir);
   }
@@ -218,7 +224,7 @@ void RegisterUploadCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--follow", args->follow, "Show the job's progress until it ends (exit 3 unless it completes)");
   cmd->add_option("--download", args->download_dir,
-                  "With --follow: write trajectory.tum, points.ply, report.json, graph.json and map.glb here");
+                  "With --follow: write trajectory.tum, points.ply, report.json, graph.json, map.glb and colmap/ here");
   cmd->add_option("--poll", args->poll_s, "Seconds between progress requests with --follow")->capture_default_str();
   cmd->callback([args] {
     try {

@@ -27,7 +27,7 @@ std::string ContentTypeFor(const std::string& name) {
   if (ends_with(".geojson")) return "application/geo+json";
   if (ends_with(".json")) return "application/json";
   if (ends_with(".glb")) return "model/gltf-binary";
-  if (ends_with(".tum")) return "text/plain; charset=utf-8";
+  if (ends_with(".tum") || ends_with(".txt")) return "text/plain; charset=utf-8";
   if (ends_with(".ply")) return "application/octet-stream";
   return "application/octet-stream";
 }

@@ -135,9 +135,11 @@ const std::vector<RouteDef>& RouteTable() {
     plain("POST", "/api/v1/jobs/{id}/finish", true, [](Context& ctx, const Request& req, Response& res) {
       SendJson(res, 200, api::JobToJson(ctx.service.Finish(JobIdParam(req))));
     });
-    for (const char* file : {"trajectory.tum", "trajectory.geojson", "points.ply", "report.json", "graph.json",
-                             "tileset.json", "map.glb", "tiles/{submap}.open.glb", "tiles/{submap}.glb",
-                             "parts/{part}/trajectory.tum", "parts/{part}/points.ply"}) {
+    for (const char* file :
+         {"trajectory.tum", "trajectory.geojson", "points.ply", "report.json", "graph.json", "tileset.json", "map.glb",
+          "colmap/cameras.txt", "colmap/images.txt", "colmap/points3D.txt", "tiles/{submap}.open.glb",
+          "tiles/{submap}.glb", "parts/{part}/trajectory.tum", "parts/{part}/points.ply",
+          "parts/{part}/colmap/cameras.txt", "parts/{part}/colmap/images.txt", "parts/{part}/colmap/points3D.txt"}) {
       const std::string name = file;
       plain("GET", ("/api/v1/jobs/{id}/" + name).c_str(), true,
             [name](Context& ctx, const Request& req, Response& res) { HandleDownload(ctx, req, res, name); });

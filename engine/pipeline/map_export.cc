@@ -9,6 +9,7 @@
 #include "engine/alignment/world_leveling.h"
 #include "engine/core/error.h"
 #include "engine/core/placed_pose.h"
+#include "engine/export/colmap_model.h"
 #include "engine/export/ply_points.h"
 #include "engine/export/tum_trajectory.h"
 #include "engine/map/submap_io.h"
@@ -23,11 +24,43 @@ struct ModelCounts {
   std::int64_t points = 0;
 };
 
-// One model's trajectory.tum and points.ply from its submaps (ids ascending).
+// A keyframe's camera: its submap's, with the keyframe's own refined focal (fy keeps the
+// submap's aspect), as the bundle adjustment projects it.
+Intrinsics KeyframeIntrinsics(const Intrinsics& submap_intrinsics, const Keyframe& keyframe) {
+  Intrinsics own = submap_intrinsics;
+  own.fy = keyframe.focal * submap_intrinsics.fy / submap_intrinsics.fx;
+  own.fx = keyframe.focal;
+  return own;
+}
+
+// The submap's keyframes and landmarks in the model's frame.
+void AddToColmapModel(const Submap& submap, const Sim3& frame_from_submap, ColmapModelWriter* colmap) {
+  std::vector<ColmapImage> images;
+  images.reserve(submap.keyframes.size());
+  for (const Keyframe& kf : submap.keyframes) {
+    images.push_back({kf.frame_index, CamFromWorld(frame_from_submap, kf.cam_from_submap),
+                      KeyframeIntrinsics(submap.intrinsics, kf)});
+  }
+  std::vector<ColmapPoint> points;
+  points.reserve(submap.landmarks.size());
+  for (const Landmark& lm : submap.landmarks) {
+    ColmapPoint p;
+    p.position_in_world = frame_from_submap * lm.point_in_submap;
+    p.color = lm.color;
+    p.observations.reserve(lm.observations.size());
+    for (const Observation& obs : lm.observations) p.observations.emplace_back(obs.keyframe, obs.pixel.cast<double>());
+    points.push_back(std::move(p));
+  }
+  colmap->Add(images, points);
+}
+
+// One model's trajectory.tum, points.ply and colmap/ (the COLMAP text model of its keyframes
+// and landmarks) from its submaps (ids ascending).
 ModelCounts WriteModel(const std::vector<PlacedSubmap>& placed, const fs::path& submaps_root,
                        const fs::path& dir, double fps) {
   ChosenPoses poses;
   std::vector<ColoredPoint> points;
+  ColmapModelWriter colmap(dir / "colmap");
   for (const PlacedSubmap& entry : placed) {
     const Submap submap = ReadSubmap(submaps_root, entry.id);
     AddFramePoses(submap, entry.frame_from_submap, &poses);
@@ -38,7 +71,9 @@ ModelCounts WriteModel(const std::vector<PlacedSubmap>& placed, const fs::path& 
       p.color = lm.color;
       points.push_back(p);
     }
+    AddToColmapModel(submap, entry.frame_from_submap, &colmap);
   }
+  colmap.Finish();
   std::vector<TimedPose> timed;
   timed.reserve(poses.size());
   for (const auto& [index, pose] : poses) timed.push_back({static_cast<double>(index) / fps, pose.first});

@@ -16,12 +16,14 @@
 #include <opencv2/videoio.hpp>
 
 #include "engine/core/intrinsics_io.h"
+#include "engine/core/median.h"
 #include "engine/export/tum_trajectory.h"
 #include "engine/geo/geodetic.h"
 #include "engine/map/submap_io.h"
 #include "engine/pipeline/map_export.h"
 #include "engine/pipeline/mapping_job.h"
 #include "tests/export/glb_test_util.h"
+#include "tests/support/colmap_text_model.h"
 #include "tests/support/exif_photo.h"
 #include "tests/support/temp_dir.h"
 #include "tests/support/unaligned_error.h"
@@ -115,6 +117,32 @@ TEST(GeoreferenceEndToEnd, AVideoWithItsSrtIsMappedInMetresEastNorthUp) {
     geo_sum += (synth_frame.EnuFromGeodetic(g) - truth[index].world_from_cam.translation()).squaredNorm();
   }
   EXPECT_LT(std::sqrt(geo_sum / static_cast<double>(mapped.size())), 0.6);
+  // colmap/: the keyframes and landmarks as a COLMAP model in the same east-north-up metres,
+  // read and projected by COLMAP's rules: its cameras where the drone truly was, its points
+  // where its images see them.
+  const glam::testing::ColmapTextModel colmap = glam::testing::ReadColmapTextModel(dir / "out" / "colmap");
+  ASSERT_GE(colmap.images.size(), 5u);
+  ASSERT_GT(colmap.points.size(), 500u);
+  double colmap_sum = 0;
+  for (const auto& [id, image] : colmap.images) {
+    const std::size_t index = std::stoul(image.name.substr(6, 6));  // frame_000123.jpg
+    ASSERT_LT(index, truth.size());
+    colmap_sum += (image.Centre() + shift - truth[index].world_from_cam.translation()).squaredNorm();
+  }
+  std::vector<double> reprojection;
+  for (const auto& [id, point] : colmap.points) {
+    for (const auto& [image_id, index] : point.track) {
+      const glam::testing::ColmapTextImage& image = colmap.images.at(image_id);
+      Eigen::Vector2d projected;
+      ASSERT_TRUE(glam::testing::ProjectColmap(colmap, image, point.position, &projected));
+      reprojection.push_back((projected - image.points2d.at(index)).norm());
+    }
+  }
+  const double colmap_rms = std::sqrt(colmap_sum / static_cast<double>(colmap.images.size()));
+  std::cout << fmt::format("colmap/: {} images, {} points, camera centres rms {:.3f} m, reprojection median {:.3f} px\n",
+                           colmap.images.size(), colmap.points.size(), colmap_rms, UpperMedian(reprojection));
+  EXPECT_LT(colmap_rms, 0.6);
+  EXPECT_LT(UpperMedian(reprojection), 0.5);
   // Without the sidecar (or with --no-gps) the same video is not georeferenced.
   MappingOptions no_gps;
   no_gps.find_gps = false;

@@ -90,6 +90,19 @@ TEST_F(HttpApiTest, UploadFollowEventsAndDownload) {
   EXPECT_EQ(res->get_header_value("Content-Type"), "application/geo+json");
   ExpectError(client.Get("/api/v1/jobs/" + id + "/tileset.json"), 404, "not_available", "tiles");
   ExpectError(client.Get("/api/v1/jobs/" + id + "/tiles/0.glb"), 404, "not_available", "tile");
+  // The COLMAP text model (colmap/), linked from the job's urls.
+  const json urls = json::parse(client.Get("/api/v1/jobs/" + id)->body)["urls"];
+  EXPECT_EQ(urls["colmap_images"], "/api/v1/jobs/" + id + "/colmap/images.txt");
+  ExpectError(client.Get(urls["colmap_points3D"].get<std::string>()), 404, "not_found", "no COLMAP model");
+  fs::create_directories(dir_ / "data" / "jobs" / id / "colmap");
+  const std::string cameras = "1 PINHOLE 640 360 500 500 320 180\n";
+  std::ofstream(dir_ / "data" / "jobs" / id / "colmap" / "cameras.txt") << cameras;
+  res = client.Get(urls["colmap_cameras"].get<std::string>());
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 200);
+  EXPECT_EQ(res->body, cameras);
+  EXPECT_EQ(res->get_header_value("Content-Type"), "text/plain; charset=utf-8");
+  ExpectError(client.Get("/api/v1/jobs/" + id + "/colmap/project.ini"), 404, "", "not a COLMAP model file");
 
   res = client.Get("/api/v1/jobs?limit=10");
   ASSERT_TRUE(res);
@@ -128,6 +141,7 @@ TEST_F(HttpApiTest, DisconnectedPartsAreServedByNumber) {
   EXPECT_EQ(job["parts"][0]["points"], 900);
   EXPECT_EQ(job["parts"][0]["urls"]["trajectory"], base + "parts/1/trajectory.tum");
   EXPECT_EQ(job["parts"][0]["urls"]["points"], base + "parts/1/points.ply");
+  EXPECT_EQ(job["parts"][0]["urls"]["colmap_points3D"], base + "parts/1/colmap/points3D.txt");
   // Listed jobs carry them too (the web viewer's job list links them).
   EXPECT_EQ(json::parse(client.Get("/api/v1/jobs")->body)["jobs"][0]["parts"], job["parts"]);
   const fs::path part_dir = dir_ / "data" / "jobs" / id / "parts" / "1";
@@ -144,6 +158,12 @@ TEST_F(HttpApiTest, DisconnectedPartsAreServedByNumber) {
   ASSERT_TRUE(res);
   EXPECT_EQ(res->status, 200);
   EXPECT_EQ(res->body, "ply\n");
+  fs::create_directories(part_dir / "colmap");
+  std::ofstream(part_dir / "colmap" / "images.txt") << "# no images\n";
+  res = client.Get(base + "parts/1/colmap/images.txt");
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 200);
+  EXPECT_EQ(res->body, "# no images\n");
   ExpectError(client.Get(base + "parts/2/trajectory.tum"), 404, "not_found", "no such part");
   ExpectError(client.Get(base + "parts/0/trajectory.tum"), 400, "bad_request", "parts count from 1");
   ExpectError(client.Get(base + "parts/one/points.ply"), 400, "bad_request", "not a number");

@@ -419,7 +419,8 @@ TEST(ServerE2E, GlamUploadSendsFollowsAndDownloads) {
   const json created = json::parse(glam::testing::ReadFile(dir / "out.txt"));
   EXPECT_EQ(created["name"], "tiny");
   EXPECT_EQ(created["input"]["filename"], "DJI_0007.MP4");
-  for (const char* name : {"trajectory.tum", "points.ply", "report.json", "graph.json", "map.glb"}) {
+  for (const char* name : {"trajectory.tum", "points.ply", "report.json", "graph.json", "map.glb",
+                           "colmap/cameras.txt", "colmap/images.txt", "colmap/points3D.txt"}) {
     EXPECT_TRUE(fs::is_regular_file(dir / "results" / name)) << name;
   }
   const json report = json::parse(glam::testing::ReadFile(dir / "results" / "report.json"));

@@ -1,0 +1,89 @@
+// The map as a COLMAP sparse model in text form (colmap/cameras.txt, images.txt, points3D.txt
+// of a result), so the tools that start from one can start from GLAM's map: COLMAP's own
+// dense reconstruction (image_undistorter, patch_match_stereo), OpenMVS, and the Gaussian
+// splatting and NeRF trainers that read COLMAP models. The format is COLMAP's documented text
+// format (colmap.github.io/format.html):
+//   cameras.txt   CAMERA_ID MODEL WIDTH HEIGHT PARAMS[]  (PINHOLE fx fy cx cy, or OPENCV
+//                 fx fy cx cy k1 k2 0 0 for a lens with radial distortion)
+//   images.txt    IMAGE_ID QW QX QY QZ TX TY TZ CAMERA_ID NAME (cam_from_world), then a line of
+//                 POINTS2D: X Y POINT3D_ID ...
+//   points3D.txt  POINT3D_ID X Y Z R G B ERROR TRACK[] as IMAGE_ID POINT2D_IDX ...
+// Two conventions differ from GLAM's and are converted here: COLMAP puts the centre of the
+// top-left pixel at (0.5, 0.5), GLAM at (0, 0), so principal points and observations move by
+// +0.5 px; and COLMAP stores cam_from_world where trajectory.tum has world_from_cam.
+//
+// The writer streams: entries are appended submap by submap, so a long flight's model needs
+// the memory of one submap, not of the whole map.
+#pragma once
+
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "engine/core/camera.h"
+#include "engine/core/se3.h"
+#include "engine/map/landmark.h"
+
+namespace glam {
+
+// An image of the model: a keyframe, named after its frame.
+struct ColmapImage {
+  std::int64_t frame_index = 0;
+  SE3 cam_from_world;
+  Intrinsics intrinsics;  // processing size, GLAM pixel convention
+};
+
+// A point of the model: its position in the world and its observations, each an image (index
+// into the images passed with it) and a pixel (GLAM convention).
+struct ColmapPoint {
+  Eigen::Vector3d position_in_world = Eigen::Vector3d::Zero();
+  Rgb color{0, 0, 0};
+  std::vector<std::pair<std::size_t, Eigen::Vector2d>> observations;
+};
+
+// The image name of a frame: frame_<index, 6 digits>.jpg (the name `ffmpeg -start_number 0
+// frame_%06d.jpg` gives the frame, docs/file-formats.md).
+std::string ColmapImageName(std::int64_t frame_index);
+
+class ColmapModelWriter {
+ public:
+  // Creates `dir` and its three files (replacing earlier ones). Throws EnvironmentError.
+  explicit ColmapModelWriter(const std::filesystem::path& dir);
+  ~ColmapModelWriter();
+  ColmapModelWriter(const ColmapModelWriter&) = delete;
+  ColmapModelWriter& operator=(const ColmapModelWriter&) = delete;
+
+  // Appends images and the points they observe (one submap's keyframes and landmarks).
+  // Observations of images this model already has under the same frame (a keyframe of the
+  // overlap, already added from the submap before) are dropped, and with them points left
+  // with fewer than two observations. ERROR of a point: its mean reprojection error.
+  void Add(const std::vector<ColmapImage>& images, const std::vector<ColmapPoint>& points);
+
+  // Completes the files (renamed into place, so a reader never sees half a model). Throws
+  // EnvironmentError.
+  void Finish();
+
+  std::int64_t images_written() const { return next_image_id_ - 1; }
+  std::int64_t points_written() const { return next_point_id_ - 1; }
+
+ private:
+  std::uint32_t CameraId(const Intrinsics& intrinsics);
+
+  std::filesystem::path dir_;
+  std::FILE* cameras_ = nullptr;
+  std::FILE* images_ = nullptr;
+  std::FILE* points_ = nullptr;
+  std::map<std::tuple<int, int, double, double, double, double, double, double>, std::uint32_t> camera_ids_;
+  std::map<std::int64_t, std::uint32_t> image_of_frame_;
+  std::uint32_t next_image_id_ = 1;
+  std::uint64_t next_point_id_ = 1;
+  bool finished_ = false;
+};
+
+}  // namespace glam
