@@ -68,13 +68,14 @@ void RemoveQuietly(const fs::path& path) {
   if (ec) GLAM_LOG_WARN("cannot remove {}: {}", path.string(), ec.message());
 }
 
-// parts/<n>/trajectory.tum or parts/<n>/points.ply: a disconnected part of a completed job's
-// flight, written on its own (report.json "parts").
 // The COLMAP text model of the map's keyframes and landmarks (engine/export/colmap_model.h).
 const std::set<std::string> kColmapFiles = {"colmap/cameras.txt", "colmap/images.txt", "colmap/points3D.txt"};
+// What a disconnected part has of the map's files.
 const std::set<std::string> kPartFiles = {"trajectory.tum", "points.ply", "colmap/cameras.txt", "colmap/images.txt",
                                           "colmap/points3D.txt"};
 
+// parts/<n>/<one of kPartFiles>: a disconnected part of a completed job's flight, written on
+// its own (report.json "parts").
 fs::path PartFile(const fs::path& dir, const std::string& id, const std::string& name) {
   constexpr std::size_t kPrefix = 6;  // "parts/"
   const std::size_t slash = name.find('/', kPrefix);

@@ -175,9 +175,8 @@ class UploadStore {
 
   // `name`: as api::SafeImageName makes it. ApiError: 400 / 404 as Get, 400 "bad_image" (not
   // a clean image name, naming the clean one; an empty image; more than kMaxImagesPerJob
-  // images), 409
-  // "upload_busy", 409 "wrong_kind" (a file session), 413 "payload_too_large" (the set's
-  // declared size cannot hold it).
+  // images), 409 "upload_busy", 409 "wrong_kind" (a file session), 413 "payload_too_large"
+  // (the set's declared size cannot hold it).
   ImageWriter PutImage(const std::string& id, const std::string& name, std::int64_t length);
 
   // Ends a complete session and moves its bytes (a file; an image set: the folder of its
