@@ -446,6 +446,14 @@ async function main() {
     const expectedParts = (job.parts || []).flatMap((p) => [p.urls.trajectory, p.urls.points]);
     check(shownParts.length === expectedParts.length && shownParts.every((path, i) => path === expectedParts[i]),
       `job table part links ${JSON.stringify(shownParts)} match the job JSON's parts ${JSON.stringify(expectedParts)}`);
+    // The COLMAP model is linked with the job JSON's URLs, and the links serve it.
+    const shownColmap = await page.$$eval(`#jobs tr[data-id="${jobId}"] .colmap a`, (els) => els.map((e) => e.href));
+    const expectedColmap = [job.urls.colmap_cameras, job.urls.colmap_images, job.urls.colmap_points3D];
+    const colmapHeads = await Promise.all(shownColmap.map(async (href) => (await (await fetch(href)).text()).split('\n')[0]));
+    check(shownColmap.length === 3 && shownColmap.every((href, i) => new URL(href).pathname === expectedColmap[i]) &&
+      colmapHeads[0].startsWith('# Camera list') && colmapHeads[1].startsWith('# Image list') &&
+      colmapHeads[2].startsWith('# 3D point list'),
+      `job table COLMAP links ${JSON.stringify(shownColmap.map((h) => new URL(h).pathname))} serve the model (${JSON.stringify(colmapHeads)})`);
 
     // 6b. Photos through the same form: several images chosen at once become one photo job,
     // sent as a resumable image set, one PUT per photo under its clean name ("DJI 0003.png"

@@ -11,6 +11,17 @@ const DOWNLOADS = [
   ['map_glb', 'map.glb'],
   ['report', 'report.json'],
 ];
+// The map as a COLMAP sparse model (docs/file-formats.md), for dense reconstruction and
+// Gaussian-splatting tools.
+const COLMAP_FILES = ['cameras.txt', 'images.txt', 'points3D.txt'];
+
+function colmapDownloads(job) {
+  const links = COLMAP_FILES.map((file) => {
+    const href = withToken(apiUrl(`jobs/${job.id}/colmap/${file}`));
+    return `<a href="${escapeHtml(href)}" download="${escapeHtml(file)}">${file}</a>`;
+  }).join(' ');
+  return `<span class="colmap" title="the map as a COLMAP sparse model">COLMAP: ${links}</span>`;
+}
 
 // What the run could not do well (textureless frames, an undetermined focal length, ...):
 // the job JSON's `warnings`, the same sentences as report.json.
@@ -40,7 +51,7 @@ function row(job) {
     ? DOWNLOADS.map(([, file]) => {
       const href = withToken(apiUrl(`jobs/${job.id}/${file}`));
       return `<a href="${escapeHtml(href)}" download>${file}</a>`;
-    }).join(' ') + (job.parts && job.parts.length ? ` ${partDownloads(job)}` : '')
+    }).join(' ') + ` ${colmapDownloads(job)}` + (job.parts && job.parts.length ? ` ${partDownloads(job)}` : '')
     : '';
   return `<tr data-id="${escapeHtml(job.id)}" data-state="${escapeHtml(job.state)}">
     <td><a href="?job=${encodeURIComponent(job.id)}">${escapeHtml(job.name || job.id)}</a></td>
