@@ -28,6 +28,11 @@ std::FILE* OpenPart(const fs::path& dir, const char* name) {
   return file;
 }
 
+std::string NameOf(const ColmapImage& image) {
+  const bool usable = !image.name.empty() && image.name.find_first_of(" \t\r\n") == std::string::npos;
+  return usable ? image.name : ColmapImageName(image.frame_index);
+}
+
 }  // namespace
 
 std::string ColmapImageName(std::int64_t frame_index) { return fmt::format("frame_{:06d}.jpg", frame_index); }
@@ -122,8 +127,7 @@ void ColmapModelWriter::Add(const std::vector<ColmapImage>& images, const std::v
     const Eigen::Quaterniond& q = images[i].cam_from_world.rotation().quaternion();
     const Eigen::Vector3d& t = images[i].cam_from_world.translation();
     fmt::print(images_, "{} {:.15g} {:.15g} {:.15g} {:.15g} {:.12g} {:.12g} {:.12g} {} {}\n", ids[i], q.w(), q.x(),
-               q.y(), q.z(), t.x(), t.y(), t.z(), CameraId(images[i].intrinsics),
-               ColmapImageName(images[i].frame_index));
+               q.y(), q.z(), t.x(), t.y(), t.z(), CameraId(images[i].intrinsics), NameOf(images[i]));
     std::string line;
     for (const Point2D& p : points2d[i]) {
       line += fmt::format("{}{:.4f} {:.4f} {}", line.empty() ? "" : " ", p.pixel.x() + kPixelCentreShift,

@@ -32,11 +32,15 @@
 
 namespace glam {
 
-// An image of the model: a keyframe, named after its frame.
+// An image of the model: a keyframe.
 struct ColmapImage {
   std::int64_t frame_index = 0;
   SE3 cam_from_world;
   Intrinsics intrinsics;  // processing size, GLAM pixel convention
+  // The image's file name: a photo's own; empty = ColmapImageName(frame_index), the name of a
+  // video frame extracted as the docs say. COLMAP splits lines at spaces, so a name with
+  // whitespace is replaced by the frame name too.
+  std::string name;
 };
 
 // A point of the model: its position in the world and its observations, each an image (index
@@ -47,8 +51,8 @@ struct ColmapPoint {
   std::vector<std::pair<std::size_t, Eigen::Vector2d>> observations;
 };
 
-// The image name of a frame: frame_<index, 6 digits>.jpg (the name `ffmpeg -start_number 0
-// frame_%06d.jpg` gives the frame, docs/file-formats.md).
+// The image name of a video frame: frame_<index, 6 digits>.jpg (the name `ffmpeg
+// -start_number 0 frame_%06d.jpg` gives the frame, docs/file-formats.md).
 std::string ColmapImageName(std::int64_t frame_index);
 
 class ColmapModelWriter {

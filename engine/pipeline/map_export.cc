@@ -33,13 +33,17 @@ Intrinsics KeyframeIntrinsics(const Intrinsics& submap_intrinsics, const Keyfram
   return own;
 }
 
-// The submap's keyframes and landmarks in the model's frame.
-void AddToColmapModel(const Submap& submap, const Sim3& frame_from_submap, ColmapModelWriter* colmap) {
+// The submap's keyframes and landmarks in the model's frame; image_names: by frame index
+// (photos), else empty.
+void AddToColmapModel(const Submap& submap, const Sim3& frame_from_submap, const std::vector<std::string>& image_names,
+                      ColmapModelWriter* colmap) {
   std::vector<ColmapImage> images;
   images.reserve(submap.keyframes.size());
   for (const Keyframe& kf : submap.keyframes) {
+    const bool named = kf.frame_index >= 0 && kf.frame_index < static_cast<std::int64_t>(image_names.size());
     images.push_back({kf.frame_index, CamFromWorld(frame_from_submap, kf.cam_from_submap),
-                      KeyframeIntrinsics(submap.intrinsics, kf)});
+                      KeyframeIntrinsics(submap.intrinsics, kf),
+                      named ? image_names[static_cast<std::size_t>(kf.frame_index)] : std::string()});
   }
   std::vector<ColmapPoint> points;
   points.reserve(submap.landmarks.size());
@@ -57,7 +61,7 @@ void AddToColmapModel(const Submap& submap, const Sim3& frame_from_submap, Colma
 // One model's trajectory.tum, points.ply and colmap/ (the COLMAP text model of its keyframes
 // and landmarks) from its submaps (ids ascending).
 ModelCounts WriteModel(const std::vector<PlacedSubmap>& placed, const fs::path& submaps_root,
-                       const fs::path& dir, double fps) {
+                       const fs::path& dir, double fps, const std::vector<std::string>& image_names) {
   ChosenPoses poses;
   std::vector<ColoredPoint> points;
   ColmapModelWriter colmap(dir / "colmap");
@@ -71,7 +75,7 @@ ModelCounts WriteModel(const std::vector<PlacedSubmap>& placed, const fs::path& 
       p.color = lm.color;
       points.push_back(p);
     }
-    AddToColmapModel(submap, entry.frame_from_submap, &colmap);
+    AddToColmapModel(submap, entry.frame_from_submap, image_names, &colmap);
   }
   colmap.Finish();
   std::vector<TimedPose> timed;
@@ -157,10 +161,10 @@ std::vector<PartModel> DisconnectedParts(const MapSnapshot& snapshot, const Part
 }
 
 MapExportCounts ExportWorldMap(const MapSnapshot& snapshot, const fs::path& submaps_root,
-                               const fs::path& out_dir, double fps) {
+                               const fs::path& out_dir, double fps, const std::vector<std::string>& image_names) {
   MapExportCounts counts;
   const std::vector<PlacedSubmap> map = MapSubmaps(snapshot);
-  const ModelCounts written = WriteModel(map, submaps_root, out_dir, fps);
+  const ModelCounts written = WriteModel(map, submaps_root, out_dir, fps, image_names);
   counts.frames_posed = written.frames_posed;
   counts.points = written.points;
   counts.submaps_exported = static_cast<std::int64_t>(map.size());
@@ -179,7 +183,7 @@ MapExportCounts ExportWorldMap(const MapSnapshot& snapshot, const fs::path& subm
     const fs::path dir = parts_dir / std::to_string(part.number);
     fs::create_directories(dir, error);
     if (error) throw EnvironmentError("cannot create " + dir.string() + ": " + error.message());
-    const ModelCounts part_written = WriteModel(model.submaps, submaps_root, dir, fps);
+    const ModelCounts part_written = WriteModel(model.submaps, submaps_root, dir, fps, image_names);
     part.frames_posed = part_written.frames_posed;
     part.points = part_written.points;
     counts.parts.push_back(std::move(part));

@@ -18,6 +18,7 @@
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -94,9 +95,12 @@ std::map<std::int64_t, Eigen::Vector3d> WorldCameraCentres(const MapSnapshot& sn
 
 // Writes trajectory.tum (t = frame index / fps; a frame posed by two submaps, i.e. in an
 // overlap, is written once, from the earlier submap unless only the later one posed it by
-// PnP) and points.ply into out_dir, and each disconnected part into out_dir/parts/<n>/ (the
-// parts/ folder is replaced, so a re-run never leaves parts of an earlier run behind).
+// PnP), points.ply and colmap/ (engine/export/colmap_model.h) into out_dir, and each
+// disconnected part into out_dir/parts/<n>/ (the parts/ folder is replaced, so a re-run never
+// leaves parts of an earlier run behind). image_names: the photos' file names by frame index,
+// for the COLMAP model's images (empty for a video: frame_<index>.jpg).
 MapExportCounts ExportWorldMap(const MapSnapshot& snapshot, const std::filesystem::path& submaps_root,
-                               const std::filesystem::path& out_dir, double fps);
+                               const std::filesystem::path& out_dir, double fps,
+                               const std::vector<std::string>& image_names = {});
 
 }  // namespace glam

@@ -184,8 +184,12 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   const bool stream = dynamic_cast<const StreamSource*>(source.get()) != nullptr;
   report.input_is_stream = stream;
   if (stream) report.input = RedactStreamUrl(report.input);
+  // A photo's frame index is its place in the folder's mapping order; the COLMAP model names
+  // its images by their files.
+  std::vector<std::string> photo_names;
   if (const auto* folder = dynamic_cast<const ImageFolderSource*>(source.get())) {
     report.photos_reordered_by_time = static_cast<std::int64_t>(folder->photos_reordered_by_time());
+    for (const std::filesystem::path& file : folder->files()) photo_names.push_back(file.filename().string());
   }
   report.fps = info.fps > 0 ? info.fps : 1.0;
   report.initial_focal = intrinsics.fx;
@@ -435,7 +439,7 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
       snapshot = std::move(plain);
     }
   }
-  const MapExportCounts exported = ExportWorldMap(*snapshot, submaps_root, out_dir, report.fps);
+  const MapExportCounts exported = ExportWorldMap(*snapshot, submaps_root, out_dir, report.fps, photo_names);
   WriteGeoJsonTrack(*snapshot, submaps_root, out_dir, report);
   tiles.OnRevision(*snapshot);
   tiles.ClearOpenPreview();  // normally gone with the revision that placed its submap

@@ -2,7 +2,7 @@
 // (tests/support/colmap_text_model.h): every observation is where COLMAP's projection of its
 // point puts it, in COLMAP's pixel convention (+0.5 px), for a pinhole and a radial camera;
 // a frame added twice (a keyframe of two submaps' overlap) is one image; a point left with one
-// observation is dropped.
+// observation is dropped; images are named after their photo or their frame.
 #include "engine/export/colmap_model.h"
 
 #include <map>
@@ -58,13 +58,15 @@ std::vector<ColmapPoint> GroundPoints(const std::vector<ColmapImage>& images, in
 
 TEST(ColmapModel, ObservationsAreWhereColmapProjectsTheirPoints) {
   const std::filesystem::path dir = glam::testing::FreshTempDir("colmap_model") / "colmap";
-  const std::vector<ColmapImage> first = {{0, CamFromWorldAbove(0, 0.0), TestIntrinsics(0)},
-                                          {5, CamFromWorldAbove(4, 0.1), TestIntrinsics(0)},
-                                          {9, CamFromWorldAbove(8, 0.2), TestIntrinsics(0)}};
+  // Frames of a video (no name: frame_<index>.jpg), a photo's own name, and a name COLMAP could
+  // not read (a space: the frame name instead).
+  const std::vector<ColmapImage> first = {{0, CamFromWorldAbove(0, 0.0), TestIntrinsics(0), ""},
+                                          {5, CamFromWorldAbove(4, 0.1), TestIntrinsics(0), "DJI_0005.JPG"},
+                                          {9, CamFromWorldAbove(8, 0.2), TestIntrinsics(0), "DJI 0009.JPG"}};
   // The next submap: frame 9 again (the overlap), then a lens with radial distortion.
-  const std::vector<ColmapImage> second = {{9, CamFromWorldAbove(8.01, 0.2), TestIntrinsics(0)},
-                                           {14, CamFromWorldAbove(12, 0.3), TestIntrinsics(-0.1)},
-                                           {18, CamFromWorldAbove(14, 0.4), TestIntrinsics(-0.1)}};
+  const std::vector<ColmapImage> second = {{9, CamFromWorldAbove(8.01, 0.2), TestIntrinsics(0), ""},
+                                           {14, CamFromWorldAbove(12, 0.3), TestIntrinsics(-0.1), ""},
+                                           {18, CamFromWorldAbove(14, 0.4), TestIntrinsics(-0.1), ""}};
   ColmapModelWriter writer(dir);
   writer.Add(first, GroundPoints(first, 30));
   std::vector<ColmapPoint> second_points = GroundPoints(second, 20);
@@ -88,7 +90,7 @@ TEST(ColmapModel, ObservationsAreWhereColmapProjectsTheirPoints) {
   ASSERT_EQ(model.images.size(), 5u);
   std::vector<std::string> names;
   for (const auto& [id, image] : model.images) names.push_back(image.name);
-  EXPECT_EQ(names, (std::vector<std::string>{"frame_000000.jpg", "frame_000005.jpg", "frame_000009.jpg",
+  EXPECT_EQ(names, (std::vector<std::string>{"frame_000000.jpg", "DJI_0005.JPG", "frame_000009.jpg",
                                              "frame_000014.jpg", "frame_000018.jpg"}));
   EXPECT_NEAR((model.images.at(3).Centre() - Eigen::Vector3d(8, 0, 50)).norm(), 0, 1e-9);  // the first one's
 
@@ -120,8 +122,8 @@ TEST(ColmapModel, NothingIsLeftBehindWithoutFinish) {
   const std::filesystem::path dir = glam::testing::FreshTempDir("colmap_model_unfinished") / "colmap";
   {
     ColmapModelWriter writer(dir);
-    const std::vector<ColmapImage> images = {{0, CamFromWorldAbove(0, 0), TestIntrinsics(0)},
-                                             {1, CamFromWorldAbove(1, 0), TestIntrinsics(0)}};
+    const std::vector<ColmapImage> images = {{0, CamFromWorldAbove(0, 0), TestIntrinsics(0), ""},
+                                             {1, CamFromWorldAbove(1, 0), TestIntrinsics(0), ""}};
     writer.Add(images, GroundPoints(images, 5));
   }
   EXPECT_TRUE(std::filesystem::is_empty(dir));

@@ -26,6 +26,7 @@
 #include "engine/core/logging.h"
 #include "engine/export/tum_trajectory.h"
 #include "engine/pipeline/mapping_options.h"
+#include "tests/support/colmap_text_model.h"
 #include "tests/support/exif_photo.h"
 #include "tests/support/unaligned_error.h"
 #include "tests/video/test_media.h"
@@ -262,6 +263,19 @@ TEST(ServerE2E, PhotoJobIsMappedAndGeoreferencedFromExif) {
   const json created = json::parse(glam::testing::ReadFile(dir / "cli.txt"));
   EXPECT_EQ(created["input"]["images"], frame_of_photo.size());
   EXPECT_EQ(created["name"], "survey");  // the folder's name
+  // Its COLMAP model (downloaded to via_cli/colmap) names the images by their photos, and
+  // each one's camera sits where that photo's EXIF put it (within the map's error).
+  const glam::testing::ColmapTextModel colmap = glam::testing::ReadColmapTextModel(dir / "via_cli" / "colmap");
+  ASSERT_GE(colmap.images.size(), 3u);
+  double colmap_sum = 0;
+  for (const auto& [image_id, photo] : colmap.images) {
+    ASSERT_EQ(photo.name.substr(0, 4), "DJI_") << photo.name;
+    const std::size_t number = std::stoul(photo.name.substr(4, 4));  // DJI_0012.JPG
+    ASSERT_LT(number, frame_of_photo.size()) << photo.name;
+    EXPECT_TRUE(fs::is_regular_file(dir / "survey" / photo.name)) << photo.name;
+    colmap_sum += (photo.Centre() + shift - truth[frame_of_photo[number]].world_from_cam.translation()).squaredNorm();
+  }
+  EXPECT_LT(std::sqrt(colmap_sum / static_cast<double>(colmap.images.size())), 1.0);
   const json cli_report = json::parse(glam::testing::ReadFile(dir / "via_cli" / "report.json"));
   EXPECT_EQ(cli_report["georeference"]["ok"], true);
   const std::vector<TimedPose> via_cli = ReadTumTrajectory(dir / "via_cli" / "trajectory.tum");
