@@ -34,14 +34,9 @@ bool SameLensModel(const Intrinsics& a, const Intrinsics& b) {
 // ray, so the joint adjustment can use one lens model for submaps whose k1 differ slightly.
 Eigen::Vector2f RemapPixel(const Intrinsics& from, const Intrinsics& to, double focal,
                            const Eigen::Vector2f& pixel) {
-  const auto with_focal = [focal](Intrinsics intrinsics) {
-    intrinsics.fy = focal * intrinsics.fy / intrinsics.fx;
-    intrinsics.fx = focal;
-    return intrinsics;
-  };
-  const Eigen::Vector3d ray = Camera(with_focal(from)).Unproject(pixel.cast<double>());
+  const Eigen::Vector3d ray = Camera(from.WithFocal(focal)).Unproject(pixel.cast<double>());
   Eigen::Vector2d out;
-  Camera(with_focal(to)).Project(ray, &out);
+  Camera(to.WithFocal(focal)).Project(ray, &out);
   return out.cast<float>();
 }
 

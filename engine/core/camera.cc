@@ -22,6 +22,13 @@ void Intrinsics::SetK1(double value) {
   if (k1 != 0) model = "radial";
 }
 
+Intrinsics Intrinsics::WithFocal(double focal) const {
+  Intrinsics out = *this;
+  out.fy = focal * fy / fx;
+  out.fx = focal;
+  return out;
+}
+
 void Intrinsics::Check() const {
   if (model != "pinhole" && model != "radial") {
     throw InputError(

@@ -32,6 +32,9 @@ struct Intrinsics {
   // Sets k1, and the model to "radial" when k1 != 0 ("pinhole" allows no distortion; a radial
   // model stays radial, k2 may need it).
   void SetK1(double value);
+  // These intrinsics at focal length `focal` (fx = focal, fy = focal x the aspect fy / fx):
+  // how a keyframe's or a submap's refined focal becomes a camera.
+  Intrinsics WithFocal(double focal) const;
 };
 
 class Camera {

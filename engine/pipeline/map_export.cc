@@ -24,15 +24,6 @@ struct ModelCounts {
   std::int64_t points = 0;
 };
 
-// A keyframe's camera: its submap's, with the keyframe's own refined focal (fy keeps the
-// submap's aspect), as the bundle adjustment projects it.
-Intrinsics KeyframeIntrinsics(const Intrinsics& submap_intrinsics, const Keyframe& keyframe) {
-  Intrinsics own = submap_intrinsics;
-  own.fy = keyframe.focal * submap_intrinsics.fy / submap_intrinsics.fx;
-  own.fx = keyframe.focal;
-  return own;
-}
-
 // The submap's keyframes and landmarks in the model's frame; image_names: by frame index
 // (photos), else empty.
 void AddToColmapModel(const Submap& submap, const Sim3& frame_from_submap, const std::vector<std::string>& image_names,
@@ -41,8 +32,10 @@ void AddToColmapModel(const Submap& submap, const Sim3& frame_from_submap, const
   images.reserve(submap.keyframes.size());
   for (const Keyframe& kf : submap.keyframes) {
     const bool named = kf.frame_index >= 0 && kf.frame_index < static_cast<std::int64_t>(image_names.size());
+    // The keyframe's camera: its submap's at the keyframe's own refined focal, as the bundle
+    // adjustment projects it.
     images.push_back({kf.frame_index, CamFromWorld(frame_from_submap, kf.cam_from_submap),
-                      KeyframeIntrinsics(submap.intrinsics, kf),
+                      submap.intrinsics.WithFocal(kf.focal),
                       named ? image_names[static_cast<std::size_t>(kf.frame_index)] : std::string()});
   }
   std::vector<ColmapPoint> points;

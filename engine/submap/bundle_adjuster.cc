@@ -80,11 +80,8 @@ void BundleAdjustmentOptions::Check() const {
 
 double ReprojectionError(const Intrinsics& intrinsics, const Keyframe& keyframe,
                          const Eigen::Vector3d& point_in_submap, const Eigen::Vector2f& pixel) {
-  Intrinsics own = intrinsics;
-  own.fy = keyframe.focal * intrinsics.fy / intrinsics.fx;
-  own.fx = keyframe.focal;
   Eigen::Vector2d projected;
-  if (!Camera(own).Project(keyframe.cam_from_submap * point_in_submap, &projected)) {
+  if (!Camera(intrinsics.WithFocal(keyframe.focal)).Project(keyframe.cam_from_submap * point_in_submap, &projected)) {
     return std::numeric_limits<double>::infinity();
   }
   return (projected - pixel.cast<double>()).norm();

@@ -27,9 +27,7 @@ SubmapBuilder::SubmapBuilder(const Intrinsics& intrinsics, const SubmapOptions& 
 }
 
 Camera SubmapBuilder::CurrentCamera() const {
-  Intrinsics in = intrinsics_;
-  in.fy = focal_ * intrinsics_.fy / intrinsics_.fx;
-  in.fx = focal_;
+  Intrinsics in = intrinsics_.WithFocal(focal_);
   in.SetK1(k1_);
   return Camera(in);
 }
