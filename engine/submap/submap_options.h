@@ -83,8 +83,8 @@ struct SubmapOptions {
   // moved less than hover_max_speed x the median landmark depth per second between the posed
   // frames 0.7 and 0.2 s before, by a line fitted through their centres; PnP of the last
   // frames before the loss degrades, measured up to 0.75 m off), the frame is posed by
-  // rotation only: the mean centre of those hover frames,
-  // and the rotation that maps the previous frame's features onto this one's (a pure-rotation
+  // rotation only: the mean centre of those hover frames, and the rotation that maps the
+  // previous frame's features onto this one's (a pure-rotation
   // fit explaining at least hover_min_rotation_fraction of the descriptor matches to within
   // RotationOnlyOptions::inlier_threshold_px, 1 px). Frame after frame, for at most
   // hover_max_seconds and while the camera turns (hover_min_turn_rate_deg_s); the first frame

@@ -69,20 +69,23 @@ bool SubmapBuilder::HoveringAt(std::size_t position) const {
   // its two ends: PnP of the frames before a loss jitters (the yaw is taking the landmarks out
   // of view), and two poses alone made a hovering drone look like one flying at 1 m/s (the
   // stop-and-yaw clip: 0.0116 x the depth per second over the hover before its second yaw).
+  std::vector<Eigen::Vector3d> centres;
+  centres.reserve(window.size());
   double mean_t = 0;
   Eigen::Vector3d mean_centre = Eigen::Vector3d::Zero();
   for (std::size_t p : window) {
+    centres.push_back(open_.frames[p].cam_from_submap->Inverse().translation());
     mean_t += open_.frames[p].timestamp_s;
-    mean_centre += open_.frames[p].cam_from_submap->Inverse().translation();
+    mean_centre += centres.back();
   }
   mean_t /= static_cast<double>(window.size());
   mean_centre /= static_cast<double>(window.size());
   double tt = 0;
   Eigen::Vector3d tc = Eigen::Vector3d::Zero();
-  for (std::size_t p : window) {
-    const double dt = open_.frames[p].timestamp_s - mean_t;
+  for (std::size_t i = 0; i < window.size(); ++i) {
+    const double dt = open_.frames[window[i]].timestamp_s - mean_t;
     tt += dt * dt;
-    tc += dt * (open_.frames[p].cam_from_submap->Inverse().translation() - mean_centre);
+    tc += dt * (centres[i] - mean_centre);
   }
   if (!(tt > 0)) return false;
   const double speed = (tc / tt).norm();
