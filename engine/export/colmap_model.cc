@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "engine/core/error.h"
+#include "engine/core/options.h"
 
 namespace glam {
 
@@ -37,7 +38,16 @@ std::string NameOf(const ColmapImage& image) {
 
 std::string ColmapImageName(std::int64_t frame_index) { return fmt::format("frame_{:06d}.jpg", frame_index); }
 
-ColmapModelWriter::ColmapModelWriter(const fs::path& dir) : dir_(dir) {
+void ColmapImageSize::Check() const {
+  CheckGreaterEqual("ColmapImageSize.width", width, 0);
+  CheckGreaterEqual("ColmapImageSize.height", height, 0);
+  if ((width == 0) != (height == 0)) throw InputError("ColmapImageSize: width and height are both 0 or both set");
+  CheckInRange("ColmapImageSize.processing_scale", processing_scale, 1e-4, 1e4);
+}
+
+ColmapModelWriter::ColmapModelWriter(const fs::path& dir, const ColmapImageSize& image_size)
+    : dir_(dir), image_size_(image_size) {
+  image_size_.Check();
   std::error_code ec;
   fs::create_directories(dir_, ec);
   if (ec) throw EnvironmentError(fmt::format("cannot create {}: {}", dir_.string(), ec.message()));
@@ -47,7 +57,8 @@ ColmapModelWriter::ColmapModelWriter(const fs::path& dir) : dir_(dir) {
   fmt::print(cameras_,
              "# Camera list with one line of data per camera:\n"
              "#   CAMERA_ID, MODEL, WIDTH, HEIGHT, PARAMS[]\n"
-             "# Written by GLAM: processing-size pixels, centre of the top-left pixel at (0.5, 0.5).\n");
+             "# Written by GLAM: pixels of the input's frames or photos, centre of the top-left pixel at "
+             "(0.5, 0.5).\n");
   fmt::print(images_,
              "# Image list with two lines of data per image:\n"
              "#   IMAGE_ID, QW, QX, QY, QZ, TX, TY, TZ, CAMERA_ID, NAME\n"
@@ -72,18 +83,28 @@ std::uint32_t ColmapModelWriter::CameraId(const Intrinsics& in) {
   const auto key = std::make_tuple(in.width, in.height, in.fx, in.fy, in.cx, in.cy, in.k1, in.k2);
   const auto [it, added] = camera_ids_.emplace(key, static_cast<std::uint32_t>(camera_ids_.size() + 1));
   if (!added) return it->second;
-  const double cx = in.cx + kPixelCentreShift;
-  const double cy = in.cy + kPixelCentreShift;
+  const bool scaled = image_size_.width > 0;
+  const int width = scaled ? image_size_.width : in.width;
+  const int height = scaled ? image_size_.height : in.height;
+  const double s = scaled ? image_size_.processing_scale : 1.0;
+  const double fx = in.fx / s;
+  const double fy = in.fy / s;
+  const Eigen::Vector2d c = ImagePixel({in.cx, in.cy});
   if (in.k1 == 0 && in.k2 == 0) {
-    fmt::print(cameras_, "{} PINHOLE {} {} {:.17g} {:.17g} {:.17g} {:.17g}\n", it->second, in.width, in.height,
-               in.fx, in.fy, cx, cy);
+    fmt::print(cameras_, "{} PINHOLE {} {} {:.17g} {:.17g} {:.17g} {:.17g}\n", it->second, width, height, fx, fy,
+               c.x(), c.y());
   } else {
     // GLAM's radial model, x_d = x (1 + k1 r^2 + k2 r^4) on normalised coordinates, is OpenCV's
     // with no tangential terms.
     fmt::print(cameras_, "{} OPENCV {} {} {:.17g} {:.17g} {:.17g} {:.17g} {:.17g} {:.17g} 0 0\n", it->second,
-               in.width, in.height, in.fx, in.fy, cx, cy, in.k1, in.k2);
+               width, height, fx, fy, c.x(), c.y(), in.k1, in.k2);
   }
   return it->second;
+}
+
+Eigen::Vector2d ColmapModelWriter::ImagePixel(const Eigen::Vector2d& processing_pixel) const {
+  const double s = image_size_.width > 0 ? image_size_.processing_scale : 1.0;
+  return (processing_pixel + Eigen::Vector2d::Constant(kPixelCentreShift)) / s;
 }
 
 void ColmapModelWriter::Add(const std::vector<ColmapImage>& images, const std::vector<ColmapPoint>& points) {
@@ -114,7 +135,7 @@ void ColmapModelWriter::Add(const std::vector<ColmapImage>& images, const std::v
       Eigen::Vector2d projected;
       const bool in_front =
           cameras[image].Project(images[image].cam_from_world * point.position_in_world, &projected);
-      error_sum += in_front ? (projected - pixel).norm() : 0.0;
+      error_sum += in_front ? (ImagePixel(projected) - ImagePixel(pixel)).norm() : 0.0;
       track += fmt::format(" {} {}", ids[image], points2d[image].size());
       points2d[image].push_back({pixel, id});
     }
@@ -130,8 +151,8 @@ void ColmapModelWriter::Add(const std::vector<ColmapImage>& images, const std::v
                q.y(), q.z(), t.x(), t.y(), t.z(), CameraId(images[i].intrinsics), NameOf(images[i]));
     std::string line;
     for (const Point2D& p : points2d[i]) {
-      line += fmt::format("{}{:.4f} {:.4f} {}", line.empty() ? "" : " ", p.pixel.x() + kPixelCentreShift,
-                          p.pixel.y() + kPixelCentreShift, p.point_id);
+      const Eigen::Vector2d pixel = ImagePixel(p.pixel);
+      line += fmt::format("{}{:.4f} {:.4f} {}", line.empty() ? "" : " ", pixel.x(), pixel.y(), p.point_id);
     }
     fmt::print(images_, "{}\n", line);
   }

@@ -11,6 +11,10 @@
 // Two conventions differ from GLAM's and are converted here: COLMAP puts the centre of the
 // top-left pixel at (0.5, 0.5), GLAM at (0, 0), so principal points and observations move by
 // +0.5 px; and COLMAP stores cam_from_world where trajectory.tum has world_from_cam.
+// And the model describes the images as the input stores them (ColmapImageSize): GLAM maps at a
+// processing size (4K video and 20-megapixel photos at 1280 px), but the tools that go on
+// from the model (dense stereo, splatting) want the input's own frames and photos, at full
+// resolution, so cameras and observations are scaled up to it.
 //
 // The writer streams: entries are appended submap by submap, so a long flight's model needs
 // the memory of one submap, not of the whole map.
@@ -55,10 +59,25 @@ struct ColmapPoint {
 // -start_number 0 frame_%06d.jpg` gives the frame, docs/file-formats.md).
 std::string ColmapImageName(std::int64_t frame_index);
 
+// The size of the input's images, which the model describes, against the processing size of
+// the intrinsics and pixels it is given. A uniform resize maps a pixel centre x (GLAM
+// convention) of the processing image to (x + 0.5) / processing_scale in COLMAP's convention
+// on the input image; focal lengths divide by processing_scale, k1 and k2 (on normalised
+// coordinates) stay.
+struct ColmapImageSize {
+  int width = 0;   // 0: the images are at the processing size (the intrinsics' own)
+  int height = 0;
+  // Processing pixels per input pixel (FrameSourceInfo::scale; one factor for both axes, as
+  // for the intrinsics given with the input, ResolveIntrinsics).
+  double processing_scale = 1.0;
+
+  void Check() const;  // throws InputError
+};
+
 class ColmapModelWriter {
  public:
   // Creates `dir` and its three files (replacing earlier ones). Throws EnvironmentError.
-  explicit ColmapModelWriter(const std::filesystem::path& dir);
+  explicit ColmapModelWriter(const std::filesystem::path& dir, const ColmapImageSize& image_size = {});
   ~ColmapModelWriter();
   ColmapModelWriter(const ColmapModelWriter&) = delete;
   ColmapModelWriter& operator=(const ColmapModelWriter&) = delete;
@@ -79,7 +98,11 @@ class ColmapModelWriter {
  private:
   std::uint32_t CameraId(const Intrinsics& intrinsics);
 
+  // A pixel of the processing image (GLAM convention) on the written image (COLMAP's).
+  Eigen::Vector2d ImagePixel(const Eigen::Vector2d& processing_pixel) const;
+
   std::filesystem::path dir_;
+  ColmapImageSize image_size_;
   std::FILE* cameras_ = nullptr;
   std::FILE* images_ = nullptr;
   std::FILE* points_ = nullptr;

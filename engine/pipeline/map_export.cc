@@ -54,10 +54,11 @@ void AddToColmapModel(const Submap& submap, const Sim3& frame_from_submap, const
 // One model's trajectory.tum, points.ply and colmap/ (the COLMAP text model of its keyframes
 // and landmarks) from its submaps (ids ascending).
 ModelCounts WriteModel(const std::vector<PlacedSubmap>& placed, const fs::path& submaps_root,
-                       const fs::path& dir, double fps, const std::vector<std::string>& image_names) {
+                       const fs::path& dir, double fps, const std::vector<std::string>& image_names,
+                       const ColmapImageSize& colmap_image_size) {
   ChosenPoses poses;
   std::vector<ColoredPoint> points;
-  ColmapModelWriter colmap(dir / "colmap");
+  ColmapModelWriter colmap(dir / "colmap", colmap_image_size);
   for (const PlacedSubmap& entry : placed) {
     const Submap submap = ReadSubmap(submaps_root, entry.id);
     AddFramePoses(submap, entry.frame_from_submap, &poses);
@@ -154,10 +155,11 @@ std::vector<PartModel> DisconnectedParts(const MapSnapshot& snapshot, const Part
 }
 
 MapExportCounts ExportWorldMap(const MapSnapshot& snapshot, const fs::path& submaps_root,
-                               const fs::path& out_dir, double fps, const std::vector<std::string>& image_names) {
+                               const fs::path& out_dir, double fps, const std::vector<std::string>& image_names,
+                               const ColmapImageSize& colmap_image_size) {
   MapExportCounts counts;
   const std::vector<PlacedSubmap> map = MapSubmaps(snapshot);
-  const ModelCounts written = WriteModel(map, submaps_root, out_dir, fps, image_names);
+  const ModelCounts written = WriteModel(map, submaps_root, out_dir, fps, image_names, colmap_image_size);
   counts.frames_posed = written.frames_posed;
   counts.points = written.points;
   counts.submaps_exported = static_cast<std::int64_t>(map.size());
@@ -176,7 +178,7 @@ MapExportCounts ExportWorldMap(const MapSnapshot& snapshot, const fs::path& subm
     const fs::path dir = parts_dir / std::to_string(part.number);
     fs::create_directories(dir, error);
     if (error) throw EnvironmentError("cannot create " + dir.string() + ": " + error.message());
-    const ModelCounts part_written = WriteModel(model.submaps, submaps_root, dir, fps, image_names);
+    const ModelCounts part_written = WriteModel(model.submaps, submaps_root, dir, fps, image_names, colmap_image_size);
     part.frames_posed = part_written.frames_posed;
     part.points = part_written.points;
     counts.parts.push_back(std::move(part));

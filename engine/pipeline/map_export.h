@@ -24,6 +24,7 @@
 
 #include "engine/core/se3.h"
 #include "engine/core/sim3.h"
+#include "engine/export/colmap_model.h"
 #include "engine/map/map_snapshot.h"
 #include "engine/map/submap.h"
 
@@ -98,9 +99,11 @@ std::map<std::int64_t, Eigen::Vector3d> WorldCameraCentres(const MapSnapshot& sn
 // PnP), points.ply and colmap/ (engine/export/colmap_model.h) into out_dir, and each
 // disconnected part into out_dir/parts/<n>/ (the parts/ folder is replaced, so a re-run never
 // leaves parts of an earlier run behind). image_names: the photos' file names by frame index,
-// for the COLMAP model's images (empty for a video: frame_<index>.jpg).
+// for the COLMAP model's images (empty for a video: frame_<index>.jpg); colmap_image_size: the
+// input's image size, which the COLMAP model describes (default: the processing size).
 MapExportCounts ExportWorldMap(const MapSnapshot& snapshot, const std::filesystem::path& submaps_root,
                                const std::filesystem::path& out_dir, double fps,
-                               const std::vector<std::string>& image_names = {});
+                               const std::vector<std::string>& image_names = {},
+                               const ColmapImageSize& colmap_image_size = {});
 
 }  // namespace glam

@@ -439,7 +439,13 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
       snapshot = std::move(plain);
     }
   }
-  const MapExportCounts exported = ExportWorldMap(*snapshot, submaps_root, out_dir, report.fps, photo_names);
+  // The COLMAP model describes the input's own frames and photos (full resolution).
+  ColmapImageSize colmap_image_size;
+  if (info.original_size.area() > 0 && info.scale > 0) {
+    colmap_image_size = {info.original_size.width, info.original_size.height, info.scale};
+  }
+  const MapExportCounts exported =
+      ExportWorldMap(*snapshot, submaps_root, out_dir, report.fps, photo_names, colmap_image_size);
   WriteGeoJsonTrack(*snapshot, submaps_root, out_dir, report);
   tiles.OnRevision(*snapshot);
   tiles.ClearOpenPreview();  // normally gone with the revision that placed its submap

@@ -2,7 +2,8 @@
 // (tests/support/colmap_text_model.h): every observation is where COLMAP's projection of its
 // point puts it, in COLMAP's pixel convention (+0.5 px), for a pinhole and a radial camera;
 // a frame added twice (a keyframe of two submaps' overlap) is one image; a point left with one
-// observation is dropped; images are named after their photo or their frame.
+// observation is dropped; images are named after their photo or their frame; cameras and
+// observations are at the input's image size where GLAM mapped at a smaller one.
 #include "engine/export/colmap_model.h"
 
 #include <map>
@@ -11,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include "engine/core/camera.h"
+#include "engine/core/error.h"
 #include "tests/support/colmap_text_model.h"
 #include "tests/support/temp_dir.h"
 
@@ -116,6 +118,53 @@ TEST(ColmapModel, ObservationsAreWhereColmapProjectsTheirPoints) {
   EXPECT_EQ(observations["frame_000009.jpg"], 30u);  // the first batch's view of frame 9 only
   EXPECT_EQ(observations["frame_000014.jpg"], 20u);  // through the radial camera
   EXPECT_EQ(observations["frame_000018.jpg"], 20u);
+}
+
+// The model describes the input's own images: a 1920x1080 camera mapped at 640x360 (scale 1/3)
+// is written at 1920x1080, and every observation is where that camera, independently of the
+// writer, sees the point.
+TEST(ColmapModel, DescribesTheInputImagesAtTheirOwnSize) {
+  const std::filesystem::path dir = glam::testing::FreshTempDir("colmap_model_input_size") / "colmap";
+  Intrinsics input;  // GLAM pixel convention
+  input.width = 1920;
+  input.height = 1080;
+  input.fx = 1500;
+  input.fy = 1530;
+  input.cx = 959.5;
+  input.cy = 539.5;
+  input.SetK1(-0.1);
+  input.k2 = 0.01;
+  // At the processing size, as ResolveIntrinsics rescales it: c' = (c + 0.5) s - 0.5.
+  const Intrinsics processing = TestIntrinsics(-0.1);
+  const std::vector<ColmapImage> images = {{0, CamFromWorldAbove(0, 0.0), processing, ""},
+                                           {7, CamFromWorldAbove(5, 0.2), processing, ""}};
+  ColmapModelWriter writer(dir, ColmapImageSize{1920, 1080, 1.0 / 3.0});
+  writer.Add(images, GroundPoints(images, 25));
+  writer.Finish();
+
+  const glam::testing::ColmapTextModel model = glam::testing::ReadColmapTextModel(dir);
+  ASSERT_EQ(model.cameras.size(), 1u);
+  const glam::testing::ColmapTextCamera& camera = model.cameras.at(1);
+  EXPECT_EQ(camera.width, 1920);
+  EXPECT_EQ(camera.height, 1080);
+  const std::vector<double> expected = {1500, 1530, 960, 540, -0.1, 0.01, 0, 0};  // COLMAP: centre +0.5
+  ASSERT_EQ(camera.params.size(), expected.size());
+  for (std::size_t i = 0; i < expected.size(); ++i) EXPECT_NEAR(camera.params[i], expected[i], 1e-9) << i;
+  ASSERT_EQ(model.points.size(), 25u);
+  for (const auto& [id, point] : model.points) {
+    EXPECT_LT(point.error, 1e-3);
+    for (const auto& [image_id, index] : point.track) {
+      const glam::testing::ColmapTextImage& image = model.images.at(image_id);
+      const ColmapImage& written = images[image_id - 1];
+      Eigen::Vector2d truth;
+      ASSERT_TRUE(Camera(input).Project(written.cam_from_world * point.position, &truth));
+      EXPECT_LT((truth + Eigen::Vector2d(0.5, 0.5) - image.points2d[index]).norm(), 2e-3);
+      Eigen::Vector2d projected;
+      ASSERT_TRUE(glam::testing::ProjectColmap(model, image, point.position, &projected));
+      EXPECT_LT((projected - image.points2d[index]).norm(), 2e-3);
+    }
+  }
+  EXPECT_THROW(ColmapModelWriter(dir, ColmapImageSize{1920, 0, 0.5}), InputError);
 }
 
 TEST(ColmapModel, NothingIsLeftBehindWithoutFinish) {
