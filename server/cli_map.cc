@@ -272,6 +272,10 @@ void RegisterMapCommand(CLI::App& app) {
                   "upsampled x2: about half the CPU time of a run, at a clearly less accurate map "
                   "(docs/benchmarks.md)")
       ->capture_default_str();
+  cmd->add_option("--local-ba-keyframes", args->options.submap.local_ba_keyframes,
+                  "Adjust only the last N keyframes (and the landmarks they see) after each new "
+                  "keyframe, the older ones held; 0 = the whole submap every time (the paper)")
+      ->capture_default_str();
   cmd->add_option("--feature-grid", args->options.sift.grid_cols,
                   "Spread each frame's SIFT features over a grid of this many columns (rows from "
                   "the aspect ratio), strongest first per cell; 0 = strongest over the frame (the paper)")
@@ -284,7 +288,8 @@ void RegisterMapCommand(CLI::App& app) {
       "adjustment, ...; docs/algorithm.md); slower");
   for (const char* name : {"--detect-every", "--feature-grid", "--keyframe-parallax", "--keyframe-coverage",
                            "--bootstrap-parallax", "--completion-ba-frames", "--smooth-window",
-                           "--per-keyframe-focal", "--global-refinement-keyframes", "--rolling-shutter-ms"}) {
+                           "--per-keyframe-focal", "--global-refinement-keyframes", "--rolling-shutter-ms",
+                           "--local-ba-keyframes"}) {
     paper->excludes(name);
   }
   cmd->add_flag("--resume", args->options.resume,

@@ -57,6 +57,7 @@ void UsePaperMethod(MappingOptions* options) {
   submap.bundle_adjustment.refine_k1 = false;
   submap.epipolar_triangulation_matching = false;
   submap.duplicate_check_in_view = false;
+  submap.local_ba_keyframes = 0;
   options->alignment.use_shared_frames = false;
   options->alignment.local_window = 0;
   options->alignment.max_demotable_submaps = 0;

@@ -65,6 +65,28 @@ double RmsReprojection(const Intrinsics& intrinsics, const std::vector<Keyframe>
   return count > 0 ? std::sqrt(sum / static_cast<double>(count)) : 0.0;
 }
 
+// The number of leading keyframes held by a local adjustment (options.local_keyframes), or
+// options.fixed_keyframes when the adjustment is the whole one (no window, or too few held
+// keyframes would anchor the window's landmarks).
+int HeldKeyframes(const std::vector<Keyframe>& keyframes, const std::vector<Landmark>& landmarks,
+                  const BundleAdjustmentOptions& options) {
+  const int count = static_cast<int>(keyframes.size());
+  const int held = count - options.local_keyframes;
+  if (options.local_keyframes <= 0 || held <= options.fixed_keyframes) return options.fixed_keyframes;
+  std::vector<int> anchor_observations(static_cast<std::size_t>(held), 0);
+  for (const Landmark& lm : landmarks) {
+    bool in_window = false;
+    for (const Observation& obs : lm.observations) in_window = in_window || static_cast<int>(obs.keyframe) >= held;
+    if (!in_window) continue;
+    for (const Observation& obs : lm.observations) {
+      if (static_cast<int>(obs.keyframe) < held) ++anchor_observations[obs.keyframe];
+    }
+  }
+  const auto anchors = std::count_if(anchor_observations.begin(), anchor_observations.end(),
+                                     [&](int n) { return n >= options.local_min_anchor_observations; });
+  return anchors >= 2 ? held : options.fixed_keyframes;
+}
+
 }  // namespace
 
 void BundleAdjustmentOptions::Check() const {
@@ -74,6 +96,8 @@ void BundleAdjustmentOptions::Check() const {
   CheckGreaterEqual("BundleAdjustmentOptions.focal_prior_px", focal_prior_px, 0.0);
   CheckGreaterEqual("BundleAdjustmentOptions.k1_prior_weight", k1_prior_weight, 0.0);
   CheckGreaterEqual("BundleAdjustmentOptions.fixed_keyframes", fixed_keyframes, 1);
+  CheckGreaterEqual("BundleAdjustmentOptions.local_keyframes", local_keyframes, 0);
+  CheckGreaterEqual("BundleAdjustmentOptions.local_min_anchor_observations", local_min_anchor_observations, 1);
   CheckGreater("BundleAdjustmentOptions.num_threads", num_threads, 0);
   CheckGreaterEqual("BundleAdjustmentOptions.dense_schur_max_keyframes", dense_schur_max_keyframes, 0);
 }
@@ -117,11 +141,18 @@ BundleAdjustmentSummary BundleAdjust(const Intrinsics& intrinsics, std::vector<K
     shared_focal = UpperMedian(std::move(focals));
   }
 
+  const int held = HeldKeyframes(keyframes, landmarks, options);
+  const bool local = held != options.fixed_keyframes;
+
   // The problem owns cost, loss and manifold objects; Ceres reference-counts the shared loss.
   ceres::Problem problem;
   auto* loss = new ceres::HuberLoss(options.huber_pixels);
   std::vector<bool> keyframe_used(keyframes.size(), false);
   for (Landmark& lm : landmarks) {
+    if (local && std::none_of(lm.observations.begin(), lm.observations.end(),
+                              [held](const Observation& obs) { return static_cast<int>(obs.keyframe) >= held; })) {
+      continue;
+    }
     for (const Observation& obs : lm.observations) {
       auto* cost = new ReprojectionCostFunction(obs.pixel.cast<double>(), intrinsics);
       PoseBlock& pose = poses[obs.keyframe];
@@ -134,9 +165,9 @@ BundleAdjustmentSummary BundleAdjust(const Intrinsics& intrinsics, std::vector<K
   for (std::size_t k = 0; k < keyframes.size(); ++k) {
     if (!keyframe_used[k]) continue;
     PoseBlock& pose = poses[k];
-    if (static_cast<int>(k) < options.fixed_keyframes) {
+    if (static_cast<int>(k) < held) {
       problem.SetParameterBlockConstant(pose.cam_from_submap);
-    } else if (k == 1 && options.fix_scale && options.fixed_keyframes == 1) {
+    } else if (k == 1 && options.fix_scale && held == 1) {
       const double* t = pose.cam_from_submap + 4;
       int largest = 0;
       for (int i = 1; i < 3; ++i) {
@@ -147,7 +178,8 @@ BundleAdjustmentSummary BundleAdjust(const Intrinsics& intrinsics, std::vector<K
       problem.SetManifold(pose.cam_from_submap, NewPoseManifold());
     }
     if (share) continue;
-    if (options.refine_focal) {
+    // A held keyframe of a local adjustment keeps its own focal too.
+    if (options.refine_focal && !(local && static_cast<int>(k) < held)) {
       problem.AddResidualBlock(
           new ceres::AutoDiffCostFunction<FocalPriorCost, 1, 1>(
               new FocalPriorCost(options.focal_prior_px > 0 ? options.focal_prior_px : keyframes[k].focal,
@@ -184,6 +216,7 @@ BundleAdjustmentSummary BundleAdjust(const Intrinsics& intrinsics, std::vector<K
   CancelCallback cancel_callback(cancel);
   solver_options.callbacks.push_back(&cancel_callback);
   ceres::Solver::Summary ceres_summary;
+  const auto solve_start = std::chrono::steady_clock::now();
   ceres::Solve(solver_options, &problem, &ceres_summary);
   cancel.ThrowIfCancelled();
 
@@ -201,9 +234,14 @@ BundleAdjustmentSummary BundleAdjust(const Intrinsics& intrinsics, std::vector<K
   summary.iterations = static_cast<int>(ceres_summary.iterations.size());
   summary.converged = ceres_summary.termination_type == ceres::CONVERGENCE;
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  GLAM_LOG_DEBUG("BA: {} keyframes, {} landmarks, rms {:.3f} -> {:.3f} px in {} iterations ({:.3f} s), "
+  GLAM_LOG_TRACE("BA timing: build {:.4f} pre {:.4f} min {:.4f} (jac {:.4f} res {:.4f} lin {:.4f}) post {:.4f} total {:.4f}",
+                 std::chrono::duration<double>(solve_start - start).count(), ceres_summary.preprocessor_time_in_seconds,
+                 ceres_summary.minimizer_time_in_seconds, ceres_summary.jacobian_evaluation_time_in_seconds,
+                 ceres_summary.residual_evaluation_time_in_seconds, ceres_summary.linear_solver_time_in_seconds,
+                 ceres_summary.postprocessor_time_in_seconds, ceres_summary.total_time_in_seconds);
+  GLAM_LOG_DEBUG("BA: {} keyframes ({} held), {} landmarks, rms {:.3f} -> {:.3f} px in {} iterations ({:.3f} s), "
                  "k1 {:.4f}",
-                 keyframes.size(), landmarks.size(), summary.initial_rms_pixels,
+                 keyframes.size(), held, landmarks.size(), summary.initial_rms_pixels,
                  summary.final_rms_pixels, summary.iterations, summary.seconds, k1);
   return summary;
 }

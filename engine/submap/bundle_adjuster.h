@@ -49,6 +49,14 @@ struct BundleAdjustmentOptions {
   double k1_prior_weight = 10.0;
   // Keyframes with index < fixed_keyframes keep their pose (gauge, or frozen history).
   int fixed_keyframes = 1;
+  // Local adjustment (ORB-SLAM's local bundle adjustment): > 0 adjusts only the last
+  // local_keyframes keyframes and the landmarks they observe; the older keyframes that observe
+  // those landmarks are held and anchor them, and landmarks no adjusted keyframe sees are left
+  // out. Falls back to the whole adjustment when fewer than two held keyframes each observe
+  // at least local_min_anchor_observations of the adjusted landmarks (they fix the gauge:
+  // pose and scale). 0 = every keyframe (from fixed_keyframes on).
+  int local_keyframes = 0;
+  int local_min_anchor_observations = 30;
   bool fix_scale = true;
   int num_threads = 1;
   // Ceres' linear solver: DENSE_SCHUR up to this many keyframes, SPARSE_SCHUR above. Both

@@ -260,6 +260,9 @@ std::size_t SubmapBuilder::TriangulateBetween(std::size_t first_position, std::s
 void SubmapBuilder::OptimiseAndFilter() {
   BundleAdjustmentOptions ba = options_.bundle_adjustment;
   ba.focal_prior_px = focal_;  // the running median (see BundleAdjustmentOptions)
+  // Local only with the camera fixed: a focal or k1 still being estimated couples every
+  // keyframe, and held poses from before its last change would pull it back.
+  if (!ba.refine_focal && !ba.refine_k1) ba.local_keyframes = options_.local_ba_keyframes;
   // What completed submaps agreed on weighs more with every keyframe they had (k1 likewise;
   // its prior is centred on the running estimate k1_).
   const double prior_growth =

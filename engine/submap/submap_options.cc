@@ -20,6 +20,7 @@ void SubmapOptions::Check() const {
   CheckGreater("SubmapOptions.tau_stereo", tau_stereo, 0);
   CheckInRange("SubmapOptions.alpha_stereo_deg", alpha_stereo_deg, 1.0, 90.0);
   CheckGreaterEqual("SubmapOptions.keyframes_per_submap", keyframes_per_submap, 3);
+  CheckGreaterEqual("SubmapOptions.local_ba_keyframes", local_ba_keyframes, 0);
   CheckInRange("SubmapOptions.overlap_fraction", overlap_fraction, 0.0, 0.5);
   CheckGreater("SubmapOptions.reference_features", reference_features, 0);
   CheckInRange("SubmapOptions.min_bootstrap_parallax_deg", min_bootstrap_parallax_deg, 0.1, 30.0);

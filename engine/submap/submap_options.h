@@ -169,6 +169,22 @@ struct SubmapOptions {
   // 0.088 / 0.052 / 0.149 m; docs/algorithm.md has the other clips. false = the paper.
   bool isolated_filter_once = true;
 
+  // The bundle adjustment after each new keyframe adjusts only the last local_ba_keyframes
+  // keyframes (three keyframe insertions: each adds the middle keyframe and the current
+  // frame) and the landmarks they see, held in place by the older keyframes that see them too
+  // (BundleAdjustmentOptions::local_keyframes; ORB-SLAM's local bundle adjustment); the
+  // completion adjustment is always the whole submap. Only while the camera is fixed
+  // (calibrated, or the focal and k1 decided and held): an estimate still moving couples every
+  // keyframe. Why: the adjustments after each keyframe were the largest part of the submap
+  // builder's time (loop benchmark video, 114 keyframes: 8.1 of 14.2 s), and a keyframe's
+  // adjustment barely moves keyframes six insertions back. Measured on the four benchmark
+  // videos, calibrated, interleaved with the whole adjustment: bundle adjustment 8.1 -> 5.7 s
+  // (loop), builder 14.2 -> 11.4 s, wall -14 % (loop), -7 to -13 % (lawnmower), -2 to -4 %
+  // (oblique), +-2 % (compressed); ATE within 0.001 m (compressed 0.149 -> 0.145 m); a window of
+  // 8 or 10 saved little, 2 cost ATE (loop 0.042 -> 0.047 m) (docs/benchmarks.md).
+  // 0 = the whole submap every time (the paper).
+  int local_ba_keyframes = 6;
+
   // Memory bound: a submap that reaches this many frames is completed regardless of its
   // keyframe count (keeps per-frame feature storage bounded on a hovering drone).
   int max_frames_per_submap = 1500;

@@ -139,6 +139,7 @@ TEST(MappingOptions, PaperMethodTurnsTheDeviationsOff) {
   EXPECT_EQ(paper.alignment.local_window, 0);
   EXPECT_EQ(paper.alignment.max_demotable_submaps, 0);
   EXPECT_FALSE(paper.submap.duplicate_check_in_view);
+  EXPECT_EQ(paper.submap.local_ba_keyframes, 0);
   // Epipolar matching for triangulation comes with a calibration, and the preset takes it
   // back when applied after it (as `glam map --intrinsics --paper` does).
   EXPECT_FALSE(defaults.submap.epipolar_triangulation_matching);
@@ -160,6 +161,7 @@ TEST(MappingOptions, PaperMethodTurnsTheDeviationsOff) {
   EXPECT_GT(defaults.submap.completion_ba_max_frames, 0);
   EXPECT_GT(defaults.submap.min_map_coverage, 0.0);
   EXPECT_GT(defaults.alignment.max_demotable_submaps, 0);
+  EXPECT_GT(defaults.submap.local_ba_keyframes, 0);
   EXPECT_EQ(paper.submap.tau_resection, defaults.submap.tau_resection);
   EXPECT_EQ(paper.submap.tau_stereo, defaults.submap.tau_stereo);
   EXPECT_EQ(paper.submap.keyframes_per_submap, defaults.submap.keyframes_per_submap);

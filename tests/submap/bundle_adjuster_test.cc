@@ -91,6 +91,67 @@ TEST(BundleAdjuster, RestoresPerturbedSceneUpToGauge) {
   EXPECT_LT(aligned.rmse, 0.1);  // metres, at 100 m altitude
 }
 
+// Local adjustment: only the last keyframes and the landmarks they see move, held in place by
+// the older keyframes that see those landmarks too, which also fix the gauge (no alignment
+// needed to compare with the truth).
+TEST(BundleAdjuster, LocalAdjustmentMovesOnlyTheLastKeyframesAndTheirLandmarks) {
+  const Scene truth = MakeScene(500, 0.3, 11);
+  Scene est = truth;
+  std::mt19937 rng(12);
+  std::normal_distribution<double> n(0, 1);
+  constexpr std::size_t kWindow = 3;
+  const std::size_t first_free = est.keyframes.size() - kWindow;
+  for (std::size_t k = first_free; k < est.keyframes.size(); ++k) {
+    Vector6d d;
+    d << 0.5 * n(rng), 0.5 * n(rng), 0.5 * n(rng), 0.005 * n(rng), 0.005 * n(rng), 0.005 * n(rng);
+    est.keyframes[k].cam_from_submap = SE3::Exp(d) * est.keyframes[k].cam_from_submap;
+  }
+  std::size_t outside = 0;
+  for (Landmark& lm : est.landmarks) {
+    bool seen = false;
+    for (const Observation& obs : lm.observations) seen = seen || obs.keyframe >= first_free;
+    if (seen) {
+      lm.point_in_submap += 0.3 * Eigen::Vector3d(n(rng), n(rng), n(rng));
+    } else {
+      ++outside;
+    }
+  }
+  ASSERT_GT(outside, 20u);
+  const Scene before = est;
+  BundleAdjustmentOptions options;
+  options.refine_focal = false;
+  options.refine_k1 = false;
+  options.max_iterations = 50;
+  options.local_keyframes = static_cast<int>(kWindow);
+  const auto summary = BundleAdjust(est.intrinsics, est.keyframes, est.landmarks, options);
+  EXPECT_GT(summary.initial_rms_pixels, 2.0);  // over all landmarks, most unperturbed
+  EXPECT_LT(summary.final_rms_pixels, 0.45);  // noise is 0.3 px per axis
+  for (std::size_t k = 0; k < first_free; ++k) {
+    EXPECT_EQ(est.keyframes[k].cam_from_submap.matrix(), before.keyframes[k].cam_from_submap.matrix()) << k;
+  }
+  for (std::size_t i = 0; i < est.landmarks.size(); ++i) {
+    bool seen = false;
+    for (const Observation& obs : est.landmarks[i].observations) seen = seen || obs.keyframe >= first_free;
+    if (!seen) {
+      EXPECT_EQ(est.landmarks[i].point_in_submap, before.landmarks[i].point_in_submap) << i;
+    }
+  }
+  const std::vector<Eigen::Vector3d> centres = Centres(est.keyframes);
+  const std::vector<Eigen::Vector3d> true_centres = Centres(truth.keyframes);
+  for (std::size_t k = first_free; k < centres.size(); ++k) {
+    // Perturbed by ~0.9 m; back within the noise's reach, in the held keyframes' gauge.
+    EXPECT_LT((centres[k] - true_centres[k]).norm(), 0.1) << k;
+  }
+
+  // Held keyframes that see too few of the window's landmarks cannot anchor it: the whole
+  // submap is adjusted instead (every keyframe after the first moves).
+  Scene whole = before;
+  options.local_min_anchor_observations = 100000;
+  BundleAdjust(whole.intrinsics, whole.keyframes, whole.landmarks, options);
+  EXPECT_EQ(whole.keyframes[0].cam_from_submap.matrix(), before.keyframes[0].cam_from_submap.matrix());
+  EXPECT_NE(whole.keyframes[2].cam_from_submap.matrix(), before.keyframes[2].cam_from_submap.matrix());
+}
+
 TEST(BundleAdjuster, DenseAndSparseSchurReachTheSameSolution) {
   // The solver is chosen by keyframe count for speed only: both must give the same answer.
   const Scene truth = MakeScene(500, 0.3, 5);
@@ -216,6 +277,9 @@ TEST(BundleAdjuster, RejectsBadOptions) {
   EXPECT_THROW(BundleAdjust(s.intrinsics, s.keyframes, s.landmarks, options), InputError);
   options = {};
   options.k1_prior_weight = -1;
+  EXPECT_THROW(BundleAdjust(s.intrinsics, s.keyframes, s.landmarks, options), InputError);
+  options = {};
+  options.local_keyframes = -1;
   EXPECT_THROW(BundleAdjust(s.intrinsics, s.keyframes, s.landmarks, options), InputError);
   options = {};
   options.dense_schur_max_keyframes = -1;
