@@ -5,7 +5,9 @@
 //
 // Gauge: a monocular submap has 7 free DoF (pose + scale). The first keyframe's pose is held
 // fixed, and the scale by fixing the largest-magnitude coordinate of the second keyframe's
-// centre (the COLMAP convention), so the problem is well posed without priors.
+// centre (the COLMAP convention), so the problem is well posed without priors. A local
+// adjustment (BundleAdjustmentOptions::local_keyframes) takes its gauge from the held older
+// keyframes instead.
 #pragma once
 
 #include <vector>
