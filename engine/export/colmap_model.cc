@@ -48,6 +48,8 @@ void ColmapImageSize::Check() const {
 ColmapModelWriter::ColmapModelWriter(const fs::path& dir, const ColmapImageSize& image_size)
     : dir_(dir), image_size_(image_size) {
   image_size_.Check();
+  // Images at the processing size: no scale, whatever was passed with width 0.
+  if (image_size_.width == 0) image_size_.processing_scale = 1.0;
   std::error_code ec;
   fs::create_directories(dir_, ec);
   if (ec) throw EnvironmentError(fmt::format("cannot create {}: {}", dir_.string(), ec.message()));
@@ -86,9 +88,8 @@ std::uint32_t ColmapModelWriter::CameraId(const Intrinsics& in) {
   const bool scaled = image_size_.width > 0;
   const int width = scaled ? image_size_.width : in.width;
   const int height = scaled ? image_size_.height : in.height;
-  const double s = scaled ? image_size_.processing_scale : 1.0;
-  const double fx = in.fx / s;
-  const double fy = in.fy / s;
+  const double fx = in.fx / image_size_.processing_scale;
+  const double fy = in.fy / image_size_.processing_scale;
   const Eigen::Vector2d c = ImagePixel({in.cx, in.cy});
   if (in.k1 == 0 && in.k2 == 0) {
     fmt::print(cameras_, "{} PINHOLE {} {} {:.17g} {:.17g} {:.17g} {:.17g}\n", it->second, width, height, fx, fy,
@@ -103,8 +104,7 @@ std::uint32_t ColmapModelWriter::CameraId(const Intrinsics& in) {
 }
 
 Eigen::Vector2d ColmapModelWriter::ImagePixel(const Eigen::Vector2d& processing_pixel) const {
-  const double s = image_size_.width > 0 ? image_size_.processing_scale : 1.0;
-  return (processing_pixel + Eigen::Vector2d::Constant(kPixelCentreShift)) / s;
+  return (processing_pixel + Eigen::Vector2d::Constant(kPixelCentreShift)) / image_size_.processing_scale;
 }
 
 void ColmapModelWriter::Add(const std::vector<ColmapImage>& images, const std::vector<ColmapPoint>& points) {

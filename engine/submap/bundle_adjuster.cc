@@ -66,6 +66,12 @@ double RmsReprojection(const Intrinsics& intrinsics, const std::vector<Keyframe>
   return count > 0 ? std::sqrt(sum / static_cast<double>(count)) : 0.0;
 }
 
+// Whether a keyframe at index >= first_keyframe observes the landmark.
+bool SeenFrom(const Landmark& landmark, int first_keyframe) {
+  return std::any_of(landmark.observations.begin(), landmark.observations.end(),
+                     [first_keyframe](const Observation& obs) { return static_cast<int>(obs.keyframe) >= first_keyframe; });
+}
+
 // The number of leading keyframes held by a local adjustment (options.local_keyframes), or
 // options.fixed_keyframes when the adjustment is the whole one (no window, or too few held
 // keyframes would anchor the window's landmarks).
@@ -76,9 +82,7 @@ int HeldKeyframes(const std::vector<Keyframe>& keyframes, const std::vector<Land
   if (options.local_keyframes <= 0 || held <= options.fixed_keyframes) return options.fixed_keyframes;
   std::vector<int> anchor_observations(static_cast<std::size_t>(held), 0);
   for (const Landmark& lm : landmarks) {
-    bool in_window = false;
-    for (const Observation& obs : lm.observations) in_window = in_window || static_cast<int>(obs.keyframe) >= held;
-    if (!in_window) continue;
+    if (!SeenFrom(lm, held)) continue;
     for (const Observation& obs : lm.observations) {
       if (static_cast<int>(obs.keyframe) < held) ++anchor_observations[obs.keyframe];
     }
@@ -150,10 +154,7 @@ BundleAdjustmentSummary BundleAdjust(const Intrinsics& intrinsics, std::vector<K
   auto* loss = new ceres::HuberLoss(options.huber_pixels);
   std::vector<bool> keyframe_used(keyframes.size(), false);
   for (Landmark& lm : landmarks) {
-    if (local && std::none_of(lm.observations.begin(), lm.observations.end(),
-                              [held](const Observation& obs) { return static_cast<int>(obs.keyframe) >= held; })) {
-      continue;
-    }
+    if (local && !SeenFrom(lm, held)) continue;
     for (const Observation& obs : lm.observations) {
       auto* cost = new ReprojectionCostFunction(obs.pixel.cast<double>(), intrinsics);
       PoseBlock& pose = poses[obs.keyframe];
