@@ -221,12 +221,15 @@ class SubmapBuilder {
   void HoldInitialFocal();
   // Reprojection rms of the open submap's keyframes and landmarks bundle adjusted on a copy
   // with `ba` and `camera` (every keyframe at `focal` when given); the time counts in stats().
+  // `adjusted_focal`, when given, receives the copy's focal after the adjustment (the median
+  // over its keyframes).
   double AdjustedCopyRms(const Intrinsics& camera, const BundleAdjustmentOptions& ba,
-                         std::optional<double> focal);
+                         std::optional<double> focal, double* adjusted_focal = nullptr);
   // SubmapOptions::k1_profile_min_rms_increase, on the open submap: the relative rms increase
   // of k1 fixed at its initial value over k1 fixed at the estimate (each adjusted to
-  // convergence on a copy).
-  double K1ProfileRmsIncrease();
+  // convergence on a copy); `focal_at_initial_k1` receives the focal of the copy adjusted at
+  // the initial k1.
+  double K1ProfileRmsIncrease(double* focal_at_initial_k1);
   // k1 goes back to the initial one and stays fixed (stats().k1_held); the caller re-tracks.
   void HoldInitialK1();
   // SubmapOptions::estimate_readout, at the completion of the first submaps until decided (at

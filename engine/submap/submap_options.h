@@ -235,7 +235,8 @@ struct SubmapOptions {
   // If the initial value raises the reprojection rms by less than this fraction, the images
   // do not ask for the estimate: k1 returns to the initial value and stays fixed, and the
   // submap is tracked again (once for both decisions: the focal profile is taken on the same
-  // pass, at the k1 just decided). Why: estimated throughout, k1 came out -0.045 to +0.011 on
+  // pass, at the k1 just decided and, when k1 is held, around the focal a copy adjusted at
+  // the held k1 gives). Why: estimated throughout, k1 came out -0.045 to +0.011 on
   // distortion-free synthetic lenses and bent their maps (ATE up to 3x; a clip at 60 deg
   // pitch lost its submaps' connection), while a k1 = -0.15 lens mapped as pinhole is 25x
   // worse than with k1 estimated. 0 = k1 estimated throughout.
