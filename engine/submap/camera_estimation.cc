@@ -119,11 +119,11 @@ bool SubmapBuilder::RebuildIfCameraMoved(std::vector<Submap>* completed) {
     return true;
   };
   // Both decisions are taken on the same keyframes, and the submap is tracked again once for
-  // both: k1 held or kept, the submap is tracked again at the decided k1 (and the focal of its
-  // estimate), as its landmarks were triangulated while both were moving; the focal profile is
-  // taken at the decided k1 (the initial one when held, else free), so a held focal needs no
-  // further pass (the first submap was built three times before, ~2 s of the builder thread on
-  // the loop benchmark video uncalibrated).
+  // both: k1 held or kept, the submap is tracked again at the decided k1 and the focal that
+  // goes with it (DecideK1), as its landmarks were triangulated while both were moving; the
+  // focal profile is taken at the decided k1 (the initial one when held, else free), so a held
+  // focal needs no further pass (the first submap was built three times before, ~2 s of the
+  // builder thread on the loop benchmark video uncalibrated).
   const bool k1_decided = DecideK1().has_value();
   bool focal_held = false;
   if (first_submap && ba.refine_focal && !stats_.focal_profile_rms_increase &&
