@@ -4,7 +4,9 @@
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
+#include "engine/core/median.h"
 #include "engine/core/se3.h"
 
 namespace glam {
@@ -15,6 +17,15 @@ struct Keyframe {
   // Per-keyframe focal length as refined by bundle adjustment (pixels, processing size).
   double focal = 0;
 };
+
+// Upper median of the keyframes' focals (0 when there are none): where a shared focal starts,
+// and what an adjusted copy of a submap settled on.
+inline double MedianFocal(const std::vector<Keyframe>& keyframes) {
+  std::vector<double> focals;
+  focals.reserve(keyframes.size());
+  for (const Keyframe& kf : keyframes) focals.push_back(kf.focal);
+  return UpperMedian(std::move(focals));
+}
 
 // The pose of one video frame (keyframe or not) inside its submap, after relocalisation.
 struct FramePose {

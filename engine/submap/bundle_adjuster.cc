@@ -8,7 +8,6 @@
 #include <ceres/ceres.h>
 
 #include "engine/core/logging.h"
-#include "engine/core/median.h"
 #include "engine/core/options.h"
 #include "engine/submap/reprojection_cost.h"
 
@@ -140,11 +139,7 @@ BundleAdjustmentSummary BundleAdjust(const Intrinsics& intrinsics, std::vector<K
   // keyframe's own (the completion BA adds tracked frames at the running median).
   const bool share = options.share_focal && options.refine_focal;
   double shared_focal = options.focal_prior_px;
-  if (share && shared_focal <= 0) {
-    std::vector<double> focals;
-    for (const Keyframe& kf : keyframes) focals.push_back(kf.focal);
-    shared_focal = UpperMedian(std::move(focals));
-  }
+  if (share && shared_focal <= 0) shared_focal = MedianFocal(keyframes);
 
   const int held = HeldKeyframes(keyframes, landmarks, options);
   const bool local = held != options.fixed_keyframes;

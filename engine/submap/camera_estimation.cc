@@ -14,7 +14,6 @@
 #include <fmt/format.h>
 
 #include "engine/core/logging.h"
-#include "engine/core/median.h"
 #include "engine/submap/submap_builder.h"
 
 namespace glam {
@@ -165,11 +164,7 @@ double SubmapBuilder::AdjustedCopyRms(const Intrinsics& camera, const BundleAdju
   }
   const BundleAdjustmentSummary summary = BundleAdjust(camera, keyframes, landmarks, ba, cancel_);
   stats_.bundle_adjust_seconds += summary.seconds;
-  if (adjusted_focal != nullptr) {
-    std::vector<double> focals;
-    for (const Keyframe& kf : keyframes) focals.push_back(kf.focal);
-    *adjusted_focal = focals.empty() ? 0.0 : UpperMedian(std::move(focals));
-  }
+  if (adjusted_focal != nullptr) *adjusted_focal = MedianFocal(keyframes);
   return summary.final_rms_pixels;
 }
 
