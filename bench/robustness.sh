@@ -16,7 +16,8 @@
 #
 # Usage: bench/robustness.sh [BUILD_DIR]   (default build; outputs in out/bench/robustness)
 # Variants: GLAM_MAP_ARGS="--detect-every 9" adds options to every `glam map`, and
-# RUN_TAG=name keeps that variant's outputs apart (out/bench/robustness/CLIP/uncalibrated-name).
+# RUN_TAG=name keeps that variant's outputs apart (out/bench/robustness/CLIP/uncalibrated-name);
+# RUNS=calibrated maps with the true intrinsics only.
 # Takes ~5 minutes on 2 cores (~10 with CALIBRATED=1).
 set -euo pipefail
 BUILD_DIR="${1:-build}"
@@ -104,6 +105,7 @@ for name in $ORDER $DERIVED_ORDER; do
   fi
   runs="uncalibrated"
   [ "${CALIBRATED:-0}" = 1 ] && runs="$runs calibrated"
+  runs="${RUNS:-$runs}"
   for run in $runs; do
     args=()
     [ "$run" = calibrated ] && args=(--intrinsics "$WORK/$name/gt/intrinsics.json")

@@ -251,6 +251,17 @@ void RegisterMapCommand(CLI::App& app) {
                   "SIFT on every N-th frame, KLT optical flow in between; 1 = SIFT on every frame "
                   "(the paper); 0 = automatic (one detection per 0.2 s of video, every photo of a folder)")
       ->capture_default_str();
+  cmd->add_option("--detect-max-seconds", args->options.max_detection_seconds,
+                  "Automatic schedule: stretch the time between SIFT detections up to this where the "
+                  "image moves slowly (faster, slightly less accurate, docs/benchmarks.md); 0 = one "
+                  "detection per 0.2 s")
+      ->check(CLI::Range(0.0, 10.0))
+      ->capture_default_str();
+  cmd->add_option("--detect-motion", args->options.detection_motion_fraction,
+                  "With --detect-max-seconds: the image motion between detections it aims at (median "
+                  "keypoint displacement, fraction of the image diagonal)")
+      ->check(CLI::Range(0.001, 1.0))
+      ->capture_default_str();
   cmd->add_option("--klt-window", args->options.klt.window_px,
                   "KLT window size in pixels (odd) for the frames between detections")
       ->capture_default_str();

@@ -2,11 +2,13 @@
 
 #include <cmath>
 #include <cstring>
+#include <utility>
 
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
 #include "engine/core/error.h"
+#include "engine/core/median.h"
 #include "engine/core/options.h"
 
 namespace glam {
@@ -73,6 +75,8 @@ void KltPropagator::SetReference(const cv::Mat& gray, const Features& features) 
     alive_[i] = static_cast<int>(i);
     last_position_[i] = features.keypoints[i].pt;
   }
+  median_displacement_px_ = 0;
+  frames_since_reference_ = 0;
 }
 
 Features KltPropagator::Propagate(const cv::Mat& gray) {
@@ -82,7 +86,11 @@ Features KltPropagator::Propagate(const cv::Mat& gray) {
   Features out;
   out.detected = false;
   out.descriptors.create(0, 128, CV_32F);
-  if (alive_.empty()) return out;
+  ++frames_since_reference_;
+  if (alive_.empty()) {
+    median_displacement_px_ = 0;
+    return out;
+  }
 
   std::vector<cv::Mat> pyramid;
   cv::buildOpticalFlowPyramid(gray, pyramid, window_, options_.pyramid_levels, true);
@@ -134,6 +142,12 @@ Features KltPropagator::Propagate(const cv::Mat& gray) {
   }
   alive_ = survivors;
   last_position_ = survivor_positions;
+  std::vector<double> moved(alive_.size());
+  for (std::size_t i = 0; i < alive_.size(); ++i) {
+    const cv::Point2f d = last_position_[i] - reference_.keypoints[alive_[i]].pt;
+    moved[i] = std::hypot(d.x, d.y);
+  }
+  median_displacement_px_ = UpperMedian(std::move(moved));
 
   out.keypoints.reserve(alive_.size());
   out.colors.reserve(alive_.size());

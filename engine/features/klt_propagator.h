@@ -92,6 +92,12 @@ class KltPropagator {
 
   bool has_reference() const { return !reference_pyramid_.empty(); }
   std::size_t reference_size() const { return reference_.size(); }
+  // How far the image moved since the reference, for the feature stage's adaptive schedule:
+  // the median distance (pixels) of the still tracked keypoints from their reference
+  // positions in the last propagated frame, and the frames propagated since SetReference.
+  // Both 0 right after SetReference; the distance is 0 when nothing is tracked.
+  double median_displacement_px() const { return median_displacement_px_; }
+  int frames_since_reference() const { return frames_since_reference_; }
 
  private:
   KltOptions options_;
@@ -100,6 +106,8 @@ class KltPropagator {
   Features reference_;
   std::vector<int> alive_;                 // reference indices still tracked
   std::vector<cv::Point2f> last_position_;  // their positions in the last propagated frame
+  double median_displacement_px_ = 0;
+  int frames_since_reference_ = 0;
 };
 
 }  // namespace glam

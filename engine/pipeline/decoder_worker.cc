@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <deque>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <thread>
@@ -28,6 +30,10 @@ void FeatureStageOptions::Check() const {
   klt.Check();
   CheckInRange("FeatureStageOptions.workers", workers, 1, 16);
   CheckInRange("FeatureStageOptions.detection_interval", detection_interval, 1, 1000);
+  if (max_detection_interval != 0) {
+    CheckInRange("FeatureStageOptions.max_detection_interval", max_detection_interval, detection_interval, 1000);
+  }
+  CheckInRange("FeatureStageOptions.detection_motion_fraction", detection_motion_fraction, 0.001, 1.0);
   rolling_shutter.Check();
 }
 
@@ -46,6 +52,8 @@ DecoderWorker::DecoderWorker(FrameSource& source, const FeatureStageOptions& opt
   const int extractors =
       options_.detection_interval > 1 && options_.workers > 1 ? options_.workers + 1 : options_.workers;
   for (int i = 0; i < extractors; ++i) extractors_.emplace_back(options_.sift);
+  const cv::Size size = source_.info().processing_size;
+  target_motion_px_ = options_.detection_motion_fraction * std::hypot(size.width, size.height);
   if (options_.rolling_shutter.enabled()) {
     if (options_.detection_interval > 1) {
       rolling_shutter_.emplace(options_.rolling_shutter, source_.info().processing_size);
@@ -141,8 +149,9 @@ std::vector<FrameFeatures> DecoderWorker::ExtractBatch(const std::vector<Frame>&
 
 // Blocks of the propagation schedule: the frames after a detection frame up to and including
 // the next detection frame (the block's last), whose SIFT runs on a helper thread while the
-// frames before it are propagated. The schedule is fixed (every N-th frame), so a block's
-// detection never depends on an earlier block's result and can start as soon as it is read.
+// frames before it are propagated. A block's length is fixed when it is read (every N-th
+// frame, or planned from the motion of the block two back), so its detection never depends on
+// the blocks still in flight and can start as soon as it is read.
 struct DecoderWorker::DetectionBlock {
   std::vector<Frame> frames;
   bool detect_last = false;  // false at the end of input: every frame is propagated
@@ -155,14 +164,53 @@ struct DecoderWorker::DetectionBlock {
   }
 };
 
+double DecoderWorker::MotionPerFrame() const {
+  const int frames = klt_.frames_since_reference();
+  if (frames == 0) return std::numeric_limits<double>::infinity();
+  return klt_.median_displacement_px() / frames;
+}
+
+void DecoderWorker::RecordMotion(double pixels_per_frame) {
+  recent_motion_.push_back(pixels_per_frame);
+  if (recent_motion_.size() > 2) {
+    recent_motion_.pop_front();
+    ++first_recent_block_;
+  }
+}
+
+double DecoderWorker::MeasuredMotion(std::size_t block) const {
+  GLAM_CHECK(block >= first_recent_block_ && block - first_recent_block_ < recent_motion_.size(),
+             "adaptive schedule planned from a block it has not measured");
+  return recent_motion_[block - first_recent_block_];
+}
+
+std::size_t DecoderWorker::PlannedInterval(std::size_t block) const {
+  const auto shortest = static_cast<std::size_t>(options_.detection_interval);
+  if (!adaptive() || block < 2) return shortest;
+  const double motion = MeasuredMotion(block - 2);
+  const auto longest = static_cast<std::size_t>(options_.max_detection_interval);
+  if (!(motion > 0)) return longest;  // still image (or nothing tracked: the survival rule decides)
+  const double frames = std::floor(target_motion_px_ / motion);
+  if (frames >= static_cast<double>(longest)) return longest;
+  return std::max(shortest, static_cast<std::size_t>(frames));
+}
+
 bool DecoderWorker::ReadAhead(std::deque<std::unique_ptr<DetectionBlock>>* blocks,
                               std::size_t* blocks_started) {
-  const auto interval = static_cast<std::size_t>(options_.detection_interval);
   const std::size_t helpers = extractors_.size() - 1;
-  // Detection frames in flight: one per helper, bounded so that read-ahead keeps few frames.
+  // Detection frames in flight: one per helper, bounded so that read-ahead keeps few frames;
+  // the adaptive schedule plans from the block two back, so at most two.
+  const auto longest =
+      static_cast<std::size_t>(std::max(options_.detection_interval, options_.max_detection_interval));
+  const std::size_t in_flight = adaptive() ? std::min<std::size_t>(helpers, 2) : helpers;
   const std::size_t max_blocks =
-      helpers == 0 ? 1 : std::clamp<std::size_t>(kMaxReadAheadFrames / interval, 1, helpers);
+      helpers == 0 ? 1 : std::clamp<std::size_t>(kMaxReadAheadFrames / longest, 1, in_flight);
   while (blocks->size() < max_blocks) {
+    const std::size_t interval = PlannedInterval(*blocks_started);
+    if (adaptive() && *blocks_started >= 2) {
+      GLAM_LOG_DEBUG("feature stage: block {} planned with {} frames ({:.2f} px per frame two blocks back)",
+                     *blocks_started, interval, MeasuredMotion(*blocks_started - 2));
+    }
     auto block = std::make_unique<DetectionBlock>();
     while (block->frames.size() < interval) {
       std::optional<Frame> frame = source_.Next();
@@ -217,11 +265,16 @@ void DecoderWorker::RunWithPropagation() {
       FrameFeatures item{block.frames[i].index, block.frames[i].timestamp_s, klt_.Propagate(gray)};
       const double survival = static_cast<double>(item.features.size()) /
                               static_cast<double>(std::max<std::size_t>(1, klt_.reference_size()));
-      if (survival < options_.klt.min_survival_fraction) {
-        // Most of the reference is gone: detect here and follow this frame instead.
+      // The adaptive plan came from older motion; where the image now moves faster than it
+      // allowed for, do not wait longer than the fixed schedule would.
+      const bool outran_plan = adaptive() && klt_.frames_since_reference() >= options_.detection_interval &&
+                               klt_.median_displacement_px() > 2 * target_motion_px_;
+      if (survival < options_.klt.min_survival_fraction || outran_plan) {
+        // Most of the reference is gone (or moved too far): detect here and follow this frame.
         item = Detect(block.frames[i], 0);
         klt_.SetReference(gray, item.features);
       }
+      if (i + 1 == propagated && adaptive()) RecordMotion(MotionPerFrame());
       busy_seconds_ += Seconds(start);
       if (!Emit(std::move(item))) return;
       start = Clock::now();

@@ -293,12 +293,15 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   feature_stage.klt = options.klt;
   feature_stage.workers = options.feature_workers;
   feature_stage.detection_interval = options.EffectiveDetectionInterval(info.fps);
+  feature_stage.max_detection_interval = options.EffectiveMaxDetectionInterval(info.fps);
+  feature_stage.detection_motion_fraction = options.detection_motion_fraction;
   feature_stage.min_features = static_cast<std::size_t>(min_features);
   feature_stage.rolling_shutter = options.rolling_shutter;
   // Without KLT tracks there is no image motion to estimate the readout from (photo folders,
   // SIFT on every frame); a readout given is warned about by the feature stage.
   if (feature_stage.detection_interval == 1) feature_stage.rolling_shutter.estimate = false;
   report.detection_interval = feature_stage.detection_interval;
+  report.max_detection_interval = std::max(feature_stage.detection_interval, feature_stage.max_detection_interval);
   DecoderWorker worker(*source, feature_stage, queue, cancel, stop);
   std::thread decoder([&worker] {
     NameCurrentThread("glam-decode");

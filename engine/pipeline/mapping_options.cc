@@ -24,15 +24,32 @@ void MappingOptions::Check() const {
   CheckGreater("MappingOptions.alignment_queue_capacity", alignment_queue_capacity, std::size_t{0});
   CheckInRange("MappingOptions.feature_workers", feature_workers, 1, 16);
   CheckInRange("MappingOptions.detection_interval", detection_interval, 0, 1000);
+  CheckInRange("MappingOptions.max_detection_seconds", max_detection_seconds, 0.0, 10.0);
+  CheckInRange("MappingOptions.detection_motion_fraction", detection_motion_fraction, 0.001, 1.0);
   klt.Check();
   rolling_shutter.Check();
   georeference.Check();
 }
 
+namespace {
+
+// Frames of the input (after stride) in `seconds`, at least one.
+int FramesIn(double seconds, double fps, int stride) {
+  const double frames_per_second = fps > 0 ? fps / stride : 1.0;
+  return std::max(1, static_cast<int>(std::lround(frames_per_second * seconds)));
+}
+
+}  // namespace
+
 int MappingOptions::EffectiveDetectionInterval(double fps) const {
   if (detection_interval > 0) return detection_interval;
-  const double frames_per_second = fps > 0 ? fps / source.stride : 1.0;
-  return std::max(1, static_cast<int>(std::lround(frames_per_second * kAutoDetectionSeconds)));
+  return FramesIn(kAutoDetectionSeconds, fps, source.stride);
+}
+
+int MappingOptions::EffectiveMaxDetectionInterval(double fps) const {
+  const int shortest = EffectiveDetectionInterval(fps);
+  if (detection_interval > 0 || shortest == 1) return shortest;
+  return std::max(shortest, FramesIn(max_detection_seconds, fps, source.stride));
 }
 
 void UsePaperMethod(MappingOptions* options) {

@@ -62,10 +62,19 @@ struct MappingOptions {
   // threads (DecoderWorker); the output is the same for any number of workers.
   int feature_workers = 2;
   // SIFT on every N-th frame, KLT optical flow in between (engine/features/klt_propagator.h).
-  // 1 = SIFT on every frame, as in the paper. 0 = automatic: one detection per
-  // kAutoDetectionSeconds of input (every 6th frame at 30 fps, every frame of a photo folder,
-  // whose fps is 1), taking the stride into account.
+  // 1 = SIFT on every frame, as in the paper. N > 1: a fixed schedule. 0 = automatic: one
+  // detection per kAutoDetectionSeconds of input (every 6th frame at 30 fps), taking the
+  // stride into account; every frame of a photo folder (whose fps is 1).
   int detection_interval = 0;
+  // Automatic schedule only, opt-in (`--detect-max-seconds`): > 0 lets the interval adapt to
+  // the image motion (FeatureStageOptions::max_detection_interval) between the automatic one
+  // and one detection per max_detection_seconds, aiming at detection_motion_fraction of the
+  // image diagonal (median keypoint displacement) between detections. Off by default: on the
+  // robustness clips 1 s at 3 % saved ~30 % of the detections and of the run time but cost
+  // 7.5 % in the sum of the calibrated ATEs (a take-off climb 0.034 -> 0.098 m) and moved
+  // uncalibrated focal estimates both ways (docs/benchmarks.md, "Adaptive detection schedule").
+  double max_detection_seconds = 0;
+  double detection_motion_fraction = 0.03;
   KltOptions klt;
   // The camera's rolling shutter: keypoints are moved to where they were at the frame's middle
   // row (engine/pipeline/rolling_shutter.h). Default: the readout is estimated on the first
@@ -90,8 +99,10 @@ struct MappingOptions {
 
   void Check() const;  // throws InputError
 
-  // detection_interval resolved for an input of `fps` frames per second (before stride).
+  // detection_interval resolved for an input of `fps` frames per second (before stride), and
+  // the longest interval the automatic schedule may stretch it to (= the interval when fixed).
   int EffectiveDetectionInterval(double fps) const;
+  int EffectiveMaxDetectionInterval(double fps) const;
 };
 
 // Time between SIFT detections under detection_interval = 0: at 30 fps KLT then bridges 5

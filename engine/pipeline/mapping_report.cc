@@ -231,6 +231,7 @@ nlohmann::json MappingReport::ToJson() const {
           {"frames_without_features", frames_without_features},
           {"frames_detected", frames_detected},
           {"detection_interval", detection_interval},
+          {"max_detection_interval", max_detection_interval},
           {"rolling_shutter",
            {{"readout_ms", rolling_shutter_ms},
             {"estimated", rolling_shutter_estimated},

@@ -40,6 +40,7 @@ struct MappingReport {
   std::int64_t frames_without_features = 0;
   std::int64_t frames_detected = 0;  // frames that got SIFT (the others: KLT propagation)
   int detection_interval = 1;        // SIFT on every N-th frame (MappingOptions)
+  int max_detection_interval = 1;    // the adaptive schedule's longest (= detection_interval: fixed)
   // Rolling-shutter correction (RollingShutterOptions): the readout used (0 = none) and how far
   // keypoints were moved, on average and at most (pixels).
   double rolling_shutter_ms = 0;

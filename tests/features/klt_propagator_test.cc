@@ -64,6 +64,25 @@ TEST(KltPropagator, FollowsSubPixelMotionAndKeepsDescriptors) {
   EXPECT_LT(errors[errors.size() * 95 / 100], 0.3);
 }
 
+// The image motion the adaptive detection schedule plans with: the median distance from the
+// reference positions, and the frames since the reference.
+TEST(KltPropagator, MeasuresHowFarTheImageMovedSinceTheReference) {
+  const Scene scene;
+  KltPropagator klt;
+  klt.SetReference(Gray(scene.bgr), scene.features);
+  EXPECT_EQ(klt.median_displacement_px(), 0.0);
+  EXPECT_EQ(klt.frames_since_reference(), 0);
+  klt.Propagate(Gray(Shifted(scene.bgr, 3.0, 4.0)));
+  EXPECT_NEAR(klt.median_displacement_px(), 5.0, 0.1);
+  EXPECT_EQ(klt.frames_since_reference(), 1);
+  klt.Propagate(Gray(Shifted(scene.bgr, 6.0, 8.0)));
+  EXPECT_NEAR(klt.median_displacement_px(), 10.0, 0.1);
+  EXPECT_EQ(klt.frames_since_reference(), 2);
+  klt.SetReference(Gray(Shifted(scene.bgr, 6.0, 8.0)), scene.features);
+  EXPECT_EQ(klt.median_displacement_px(), 0.0);
+  EXPECT_EQ(klt.frames_since_reference(), 0);
+}
+
 TEST(KltPropagator, TracksEveryFrameFromTheReferenceWithoutDrift) {
   const Scene scene;
   KltPropagator klt;

@@ -1,5 +1,5 @@
-// The feature stage's schedule: SIFT on every N-th frame, KLT in between, frames in input
-// order with either worker count, an early detection when most tracks are lost, and errors
+// The feature stage's schedule: SIFT on every N-th frame (or adapted to the image motion),
+// KLT in between, frames in input order with either worker count, an early detection when most tracks are lost, and errors
 // and cancellation that leave no thread behind.
 #include "engine/pipeline/decoder_worker.h"
 
@@ -51,6 +51,42 @@ class PanningSource : public FrameSource {
   FrameSourceInfo info_;
 };
 
+// Frames of a texture panning right by `slow_px` per frame up to frame `change`, by `fast_px`
+// per frame after it (the camera speeds up).
+class SpeedChangeSource : public FrameSource {
+ public:
+  SpeedChangeSource(int frames, int change, int slow_px, int fast_px)
+      : frames_(frames), change_(change), slow_px_(slow_px), fast_px_(fast_px) {
+    info_.fps = 30;
+    info_.frame_count = frames;
+    info_.original_size = info_.processing_size = {320, 240};
+    texture_ = testing::RandomTexture({320 + Offset(frames), 240}, 7);
+  }
+  std::optional<Frame> Next() override {
+    if (next_ >= frames_) return std::nullopt;
+    Frame f;
+    f.index = next_;
+    f.timestamp_s = next_ / 30.0;
+    f.bgr = texture_(cv::Rect(Offset(next_), 0, 320, 240)).clone();
+    f.original_size = f.bgr.size();
+    ++next_;
+    return f;
+  }
+  const FrameSourceInfo& info() const override { return info_; }
+  void SeekTo(int64_t index) override { next_ = static_cast<int>(index); }
+  int64_t frames_delivered() const override { return next_; }
+  bool ended_early() const override { return false; }
+
+ private:
+  int Offset(int frame) const {
+    return slow_px_ * std::min(frame, change_) + fast_px_ * std::max(0, frame - change_);
+  }
+  int frames_, change_, slow_px_, fast_px_;
+  int next_ = 0;
+  cv::Mat texture_;
+  FrameSourceInfo info_;
+};
+
 std::vector<FrameFeatures> RunWorker(FrameSource& source, const FeatureStageOptions& options) {
   return testing::RunFeatureStage(source, options);
 }
@@ -93,14 +129,70 @@ TEST(DecoderWorker, DetectsEveryNthFrameAndPropagatesTheRestInOrder) {
   }
 }
 
+// Detected frames of a run, in order.
+std::vector<std::int64_t> DetectedFrames(const std::vector<FrameFeatures>& items) {
+  std::vector<std::int64_t> detected;
+  for (const FrameFeatures& item : items) {
+    if (item.features.detected) detected.push_back(item.index);
+  }
+  return detected;
+}
+
+FeatureStageOptions AdaptiveOptions(int workers) {
+  FeatureStageOptions o = Options(3, workers);
+  o.max_detection_interval = 30;
+  o.detection_motion_fraction = 0.03;  // 12 px on the 320x240 frames
+  return o;
+}
+
+// The adaptive schedule: 1 px per frame for 60 frames, then 8 px per frame. The slow pan is
+// detected about every 12th frame (the blocks planned from the motion measured two blocks
+// back), the fast one every 3rd (the shortest interval); the blocks planned from the slow
+// motion when the camera speeds up are cut short once the image moved twice the target.
+TEST(DecoderWorker, AdaptiveScheduleDetectsWhenTheImageHasMoved) {
+  SpeedChangeSource source(120, 60, 1, 8);
+  const std::vector<FrameFeatures> items = RunWorker(source, AdaptiveOptions(2));
+  ASSERT_EQ(items.size(), 120u);
+  const std::vector<std::int64_t> detected = DetectedFrames(items);
+  ASSERT_GE(detected.size(), 4u);
+  EXPECT_EQ(detected[0], 0);
+  EXPECT_EQ(detected[1], 3);  // the first two blocks: no motion measured yet
+  EXPECT_EQ(detected[2], 6);
+  int slow = 0;
+  for (std::size_t i = 1; i < detected.size(); ++i) {
+    const std::int64_t gap = detected[i] - detected[i - 1];
+    if (detected[i - 1] >= 6 && detected[i] <= 60) {
+      ++slow;
+      EXPECT_GE(gap, 10) << "after frame " << detected[i - 1];
+      EXPECT_LE(gap, 13) << "after frame " << detected[i - 1];
+    }
+    // Moving 8 px per frame, no frame waits longer than 4 frames (32 px > twice 12 px).
+    if (detected[i - 1] >= 60) {
+      EXPECT_LE(gap, 4) << "after frame " << detected[i - 1];
+    }
+    if (detected[i - 1] >= 90) {
+      EXPECT_EQ(gap, 3) << "after frame " << detected[i - 1];
+    }
+  }
+  EXPECT_GE(slow, 3);
+  // The fixed schedule at the shortest interval detects 40 of the 120 frames.
+  EXPECT_LT(detected.size(), 30u);
+}
+
 // SIFT of the next detection frames runs ahead on `workers` helper threads (fewer when the
-// interval is long); what the stage emits is the same for every worker count.
+// interval is long); what the stage emits is the same for every worker count, with the
+// adaptive schedule too.
 TEST(DecoderWorker, OutputDoesNotDependOnTheNumberOfWorkers) {
-  for (int interval : {3, 40}) {
+  for (int interval : {3, 40, 0}) {
     std::vector<std::vector<FrameFeatures>> runs;
     for (int workers : {1, 2, 3}) {
-      PanningSource source(90);
-      runs.push_back(RunWorker(source, Options(interval, workers)));
+      if (interval == 0) {  // the adaptive schedule
+        SpeedChangeSource source(90, 45, 1, 8);
+        runs.push_back(RunWorker(source, AdaptiveOptions(workers)));
+      } else {
+        PanningSource source(90);
+        runs.push_back(RunWorker(source, Options(interval, workers)));
+      }
     }
     for (std::size_t r = 1; r < runs.size(); ++r) {
       ASSERT_EQ(runs[r].size(), runs[0].size());
@@ -175,6 +267,13 @@ TEST(DecoderWorker, OptionsAreChecked) {
   FeatureStageOptions o = Options(0, 2);
   EXPECT_THROW(o.Check(), InputError);
   o = Options(3, 0);
+  EXPECT_THROW(o.Check(), InputError);
+  o = AdaptiveOptions(2);
+  EXPECT_NO_THROW(o.Check());
+  o.max_detection_interval = 2;  // shorter than the shortest
+  EXPECT_THROW(o.Check(), InputError);
+  o = AdaptiveOptions(2);
+  o.detection_motion_fraction = 0;
   EXPECT_THROW(o.Check(), InputError);
 }
 

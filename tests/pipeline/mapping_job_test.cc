@@ -119,6 +119,33 @@ int RunCli(const std::string& args, std::string* output) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
+// The automatic detection schedule in frames: 0.2 s of input after the stride, stretched up to
+// max_detection_seconds when asked for; a fixed --detect-every, photo folders (1 fps) and the
+// default (0 s) stay fixed.
+TEST(MappingOptions, DetectionIntervalsFollowTheFrameRate) {
+  MappingOptions o;
+  EXPECT_EQ(o.EffectiveMaxDetectionInterval(30), 6);  // off by default
+  o.max_detection_seconds = 1.0;
+  EXPECT_EQ(o.EffectiveDetectionInterval(30), 6);
+  EXPECT_EQ(o.EffectiveMaxDetectionInterval(30), 30);
+  EXPECT_EQ(o.EffectiveDetectionInterval(15), 3);
+  EXPECT_EQ(o.EffectiveMaxDetectionInterval(15), 15);
+  EXPECT_EQ(o.EffectiveMaxDetectionInterval(1), 1);  // a photo folder: SIFT on every photo
+  o.source.stride = 2;
+  EXPECT_EQ(o.EffectiveDetectionInterval(30), 3);
+  EXPECT_EQ(o.EffectiveMaxDetectionInterval(30), 15);
+  o.source.stride = 1;
+  o.max_detection_seconds = 0;
+  EXPECT_EQ(o.EffectiveMaxDetectionInterval(30), 6);
+  o.max_detection_seconds = 1.0;
+  o.detection_interval = 4;
+  EXPECT_EQ(o.EffectiveDetectionInterval(30), 4);
+  EXPECT_EQ(o.EffectiveMaxDetectionInterval(30), 4);
+  o.detection_interval = 0;
+  o.max_detection_seconds = -1;
+  EXPECT_THROW(o.Check(), InputError);
+}
+
 // The paper preset turns every documented deviation with an option back, and nothing else.
 TEST(MappingOptions, PaperMethodTurnsTheDeviationsOff) {
   const MappingOptions defaults;

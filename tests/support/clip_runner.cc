@@ -59,7 +59,9 @@ ClipRun RunSubmapBuilderOnClip(const std::filesystem::path& video, const Intrins
   FeatureStageOptions stage;
   stage.sift = sift;
   stage.detection_interval = mapping.EffectiveDetectionInterval(source->info().fps);
-  std::printf("SIFT on every %d. frame\n", stage.detection_interval);
+  stage.max_detection_interval = mapping.EffectiveMaxDetectionInterval(source->info().fps);
+  stage.detection_motion_fraction = mapping.detection_motion_fraction;
+  std::printf("SIFT on every %d. to %d. frame\n", stage.detection_interval, stage.max_detection_interval);
   BoundedQueue<FrameFeatures> queue(8);
   std::atomic<bool> stop{false};
   DecoderWorker worker(*source, stage, queue, {}, stop);
