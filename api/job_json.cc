@@ -104,6 +104,13 @@ JobOptions ParseJobOptions(const json& j) {
         throw InputError(fmt::format("options.detect_every must be in [0, 1000] (0 = automatic), got {}",
                                      *o.detect_every));
       }
+    } else if (key == "detect_max_seconds") {
+      o.detect_max_seconds = GetNumber(value, "detect_max_seconds");
+      if (!(*o.detect_max_seconds >= 0 && *o.detect_max_seconds <= 10)) {
+        throw InputError(fmt::format(
+            "options.detect_max_seconds must be in [0, 10] seconds (0 = one detection per 0.2 s), got {}",
+            *o.detect_max_seconds));
+      }
     } else if (key == "fixed_k1") {
       o.fixed_k1 = GetBool(value, "fixed_k1");
     } else if (key == "name_order") {
@@ -152,7 +159,8 @@ JobOptions ParseJobOptions(const json& j) {
     } else {
       throw InputError(fmt::format(
           "options: unknown key \"{}\" (known: name, stride, focal, intrinsics, "
-          "keyframes_per_submap, max_image_size, detect_every, fixed_k1, smooth_window_s, name_order, "
+          "keyframes_per_submap, max_image_size, detect_every, detect_max_seconds, fixed_k1, smooth_window_s, "
+          "name_order, "
           "refine_focal, max_features, global_refinement_keyframes, rolling_shutter_ms, preview_interval_s)",
           key));
     }
@@ -185,6 +193,7 @@ json ToJson(const JobOptions& o) {
   if (o.keyframes_per_submap) j["keyframes_per_submap"] = *o.keyframes_per_submap;
   if (o.max_image_size) j["max_image_size"] = *o.max_image_size;
   if (o.detect_every) j["detect_every"] = *o.detect_every;
+  if (o.detect_max_seconds) j["detect_max_seconds"] = *o.detect_max_seconds;
   if (o.fixed_k1) j["fixed_k1"] = *o.fixed_k1;
   if (o.smooth_window_s) j["smooth_window_s"] = *o.smooth_window_s;
   if (o.preview_interval_s) j["preview_interval_s"] = *o.preview_interval_s;
@@ -210,6 +219,7 @@ MappingOptions ToMappingOptions(const JobOptions& o) {
   if (o.focal) m.focal_px = *o.focal;
   if (o.keyframes_per_submap) m.submap.keyframes_per_submap = *o.keyframes_per_submap;
   if (o.detect_every) m.detection_interval = *o.detect_every;
+  if (o.detect_max_seconds) m.max_detection_seconds = *o.detect_max_seconds;
   if (o.fixed_k1 && *o.fixed_k1) m.submap.bundle_adjustment.refine_k1 = false;  // as --fixed-k1
   if (o.smooth_window_s) m.submap.centre_smoothing.half_window_s = *o.smooth_window_s;
   if (o.preview_interval_s) m.preview.interval_s = *o.preview_interval_s;

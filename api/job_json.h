@@ -25,6 +25,9 @@ struct JobOptions {
   std::optional<int> keyframes_per_submap;  // submap size
   std::optional<int> max_image_size;        // processing long side (px), 0 = no downscale
   std::optional<int> detect_every;          // SIFT on every N-th frame (1 = every frame, 0 = auto)
+  // Automatic schedule: stretch the time between detections up to this where the image moves
+  // slowly (`glam map --detect-max-seconds`; 0 = one detection per 0.2 s, the default).
+  std::optional<double> detect_max_seconds;
   // Keep the lens' radial distortion k1 as it is (0, or the k1 of `intrinsics`, which is
   // never re-estimated) instead of estimating it (`glam map --fixed-k1`).
   std::optional<bool> fixed_k1;
@@ -60,7 +63,7 @@ struct JobOptions {
 inline constexpr int kMaxGlobalRefinementKeyframes = 1000;
 
 // Accepts an object with the keys name, stride, focal, intrinsics, keyframes_per_submap,
-// max_image_size, detect_every, fixed_k1, smooth_window_s, name_order, refine_focal,
+// max_image_size, detect_every, detect_max_seconds, fixed_k1, smooth_window_s, name_order, refine_focal,
 // max_features, global_refinement_keyframes, rolling_shutter_ms, preview_interval_s (all optional). Throws InputError naming the key
 // for unknown keys, wrong types or out-of-range values (the resulting MappingOptions are
 // Check()ed as well).

@@ -156,7 +156,8 @@ api::JobOptions RawBodyOptions(const httplib::Request& req) {
     } else {
       try {
         std::size_t used = 0;
-        if (key == "focal" || key == "smooth_window_s" || key == "rolling_shutter_ms" || key == "preview_interval_s") {
+        if (key == "focal" || key == "smooth_window_s" || key == "rolling_shutter_ms" || key == "preview_interval_s" ||
+            key == "detect_max_seconds") {
           j[key] = std::stod(value, &used);
         } else {
           j[key] = std::stoll(value, &used);

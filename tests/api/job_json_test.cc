@@ -14,7 +14,7 @@ using nlohmann::json;
 
 TEST(JobJson, ParsesOptionsAndMapsThemToEngineOptions) {
   const JobOptions o = ParseJobOptionsText(R"({"name": "flight 1", "stride": 2, "focal": 900.5,
-      "keyframes_per_submap": 8, "detect_every": 1,
+      "keyframes_per_submap": 8, "detect_every": 1, "detect_max_seconds": 0.5,
       "intrinsics": {"model": "pinhole", "width": 640, "height": 360, "fx": 500, "fy": 501,
                      "cx": 319.5, "cy": 179.5}})");
   EXPECT_EQ(o.name, "flight 1");
@@ -26,6 +26,8 @@ TEST(JobJson, ParsesOptionsAndMapsThemToEngineOptions) {
   EXPECT_EQ(m.source.stride, 2);
   EXPECT_EQ(m.submap.keyframes_per_submap, 8);
   EXPECT_EQ(m.detection_interval, 1);
+  EXPECT_DOUBLE_EQ(m.max_detection_seconds, 0.5);
+  EXPECT_EQ(ToMappingOptions(JobOptions{}).max_detection_seconds, 0.0);  // fixed schedule by default
   EXPECT_EQ(ToMappingOptions(JobOptions{}).detection_interval, 0);  // automatic by default
   ASSERT_TRUE(m.intrinsics.has_value());
   EXPECT_DOUBLE_EQ(m.intrinsics->cx, 319.5);
@@ -112,6 +114,8 @@ TEST(JobJson, RejectsBadOptionsWithTheKeyInTheMessage) {
   EXPECT_NE(message(R"({"stride": 0})").find("stride"), std::string::npos);
   EXPECT_NE(message(R"({"focal": -5})").find("focal"), std::string::npos);
   EXPECT_NE(message(R"({"detect_every": -1})").find("detect_every"), std::string::npos);
+  EXPECT_NE(message(R"({"detect_max_seconds": 11})").find("detect_max_seconds"), std::string::npos);
+  EXPECT_NE(message(R"({"detect_max_seconds": "1"})").find("detect_max_seconds"), std::string::npos);
   EXPECT_NE(message(R"({"fixed_k1": "yes"})").find("fixed_k1"), std::string::npos);
   EXPECT_NE(message(R"({"fixed_k1": 1})").find("fixed_k1"), std::string::npos);
   EXPECT_NE(message(R"({"name_order": "yes"})").find("name_order"), std::string::npos);

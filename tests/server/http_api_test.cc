@@ -403,7 +403,8 @@ TEST_F(HttpApiTest, RawBodyUploadTakesOptionsFromQuery) {
   Start({}, "raw");
   auto client = Client();
   auto res = client.Post("/api/v1/jobs?name=raw%20clip&stride=2&fixed_k1=true&smooth_window_s=0.5&refine_focal=1&"
-                         "max_features=3000&global_refinement_keyframes=0&rolling_shutter_ms=auto&filename=c.avi",
+                         "max_features=3000&global_refinement_keyframes=0&rolling_shutter_ms=auto&detect_max_seconds=0.5&"
+                         "filename=c.avi",
                          glam::testing::ReadFile(video_), "video/x-msvideo");
   ASSERT_TRUE(res);
   ASSERT_EQ(res->status, 201) << res->body;
@@ -416,6 +417,7 @@ TEST_F(HttpApiTest, RawBodyUploadTakesOptionsFromQuery) {
   EXPECT_EQ(job["options"]["max_features"], 3000);
   EXPECT_EQ(job["options"]["global_refinement_keyframes"], 0);
   EXPECT_EQ(job["options"]["rolling_shutter_ms"], "auto");
+  EXPECT_EQ(job["options"]["detect_max_seconds"], 0.5);
   EXPECT_TRUE(fs::exists(dir_ / "data" / "jobs" / job["id"].get<std::string>() / "input.avi"));
   res = client.Post("/api/v1/jobs", {{"X-Glam-Options", R"({"keyframes_per_submap": 6})"}},
                     glam::testing::ReadFile(video_), "application/octet-stream");
