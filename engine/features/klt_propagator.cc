@@ -75,8 +75,16 @@ void KltPropagator::SetReference(const cv::Mat& gray, const Features& features) 
     alive_[i] = static_cast<int>(i);
     last_position_[i] = features.keypoints[i].pt;
   }
-  median_displacement_px_ = 0;
   frames_since_reference_ = 0;
+}
+
+double KltPropagator::median_displacement_px() const {
+  std::vector<double> moved(alive_.size());
+  for (std::size_t i = 0; i < alive_.size(); ++i) {
+    const cv::Point2f d = last_position_[i] - reference_.keypoints[alive_[i]].pt;
+    moved[i] = std::hypot(d.x, d.y);
+  }
+  return UpperMedian(std::move(moved));
 }
 
 Features KltPropagator::Propagate(const cv::Mat& gray) {
@@ -87,10 +95,7 @@ Features KltPropagator::Propagate(const cv::Mat& gray) {
   out.detected = false;
   out.descriptors.create(0, 128, CV_32F);
   ++frames_since_reference_;
-  if (alive_.empty()) {
-    median_displacement_px_ = 0;
-    return out;
-  }
+  if (alive_.empty()) return out;
 
   std::vector<cv::Mat> pyramid;
   cv::buildOpticalFlowPyramid(gray, pyramid, window_, options_.pyramid_levels, true);
@@ -142,12 +147,6 @@ Features KltPropagator::Propagate(const cv::Mat& gray) {
   }
   alive_ = survivors;
   last_position_ = survivor_positions;
-  std::vector<double> moved(alive_.size());
-  for (std::size_t i = 0; i < alive_.size(); ++i) {
-    const cv::Point2f d = last_position_[i] - reference_.keypoints[alive_[i]].pt;
-    moved[i] = std::hypot(d.x, d.y);
-  }
-  median_displacement_px_ = UpperMedian(std::move(moved));
 
   out.keypoints.reserve(alive_.size());
   out.colors.reserve(alive_.size());

@@ -95,8 +95,9 @@ class KltPropagator {
   // How far the image moved since the reference, for the feature stage's adaptive schedule:
   // the median distance (pixels) of the still tracked keypoints from their reference
   // positions in the last propagated frame, and the frames propagated since SetReference.
-  // Both 0 right after SetReference; the distance is 0 when nothing is tracked.
-  double median_displacement_px() const { return median_displacement_px_; }
+  // Both 0 right after SetReference; the distance is 0 when nothing is tracked. Computed when
+  // asked (O(tracked points)), so the fixed schedule pays nothing for it.
+  double median_displacement_px() const;
   int frames_since_reference() const { return frames_since_reference_; }
 
  private:
@@ -106,7 +107,6 @@ class KltPropagator {
   Features reference_;
   std::vector<int> alive_;                 // reference indices still tracked
   std::vector<cv::Point2f> last_position_;  // their positions in the last propagated frame
-  double median_displacement_px_ = 0;
   int frames_since_reference_ = 0;
 };
 

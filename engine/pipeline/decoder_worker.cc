@@ -189,10 +189,14 @@ std::size_t DecoderWorker::PlannedInterval(std::size_t block) const {
   if (!adaptive() || block < 2) return shortest;
   const double motion = MeasuredMotion(block - 2);
   const auto longest = static_cast<std::size_t>(options_.max_detection_interval);
-  if (!(motion > 0)) return longest;  // still image (or nothing tracked: the survival rule decides)
-  const double frames = std::floor(target_motion_px_ / motion);
-  if (frames >= static_cast<double>(longest)) return longest;
-  return std::max(shortest, static_cast<std::size_t>(frames));
+  std::size_t planned = longest;  // a still image (or nothing tracked: the survival rule decides)
+  if (motion > 0) {
+    const double frames = std::floor(target_motion_px_ / motion);
+    if (frames < static_cast<double>(longest)) planned = std::max(shortest, static_cast<std::size_t>(frames));
+  }
+  GLAM_LOG_DEBUG("feature stage: block {} planned with {} frames ({:.2f} px per frame two blocks back)", block,
+                 planned, motion);
+  return planned;
 }
 
 bool DecoderWorker::ReadAhead(std::deque<std::unique_ptr<DetectionBlock>>* blocks,
@@ -207,10 +211,6 @@ bool DecoderWorker::ReadAhead(std::deque<std::unique_ptr<DetectionBlock>>* block
       helpers == 0 ? 1 : std::clamp<std::size_t>(kMaxReadAheadFrames / longest, 1, in_flight);
   while (blocks->size() < max_blocks) {
     const std::size_t interval = PlannedInterval(*blocks_started);
-    if (adaptive() && *blocks_started >= 2) {
-      GLAM_LOG_DEBUG("feature stage: block {} planned with {} frames ({:.2f} px per frame two blocks back)",
-                     *blocks_started, interval, MeasuredMotion(*blocks_started - 2));
-    }
     auto block = std::make_unique<DetectionBlock>();
     while (block->frames.size() < interval) {
       std::optional<Frame> frame = source_.Next();

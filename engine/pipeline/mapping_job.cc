@@ -301,7 +301,7 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   // SIFT on every frame); a readout given is warned about by the feature stage.
   if (feature_stage.detection_interval == 1) feature_stage.rolling_shutter.estimate = false;
   report.detection_interval = feature_stage.detection_interval;
-  report.max_detection_interval = std::max(feature_stage.detection_interval, feature_stage.max_detection_interval);
+  report.max_detection_interval = feature_stage.max_detection_interval;  // = detection_interval when fixed
   DecoderWorker worker(*source, feature_stage, queue, cancel, stop);
   std::thread decoder([&worker] {
     NameCurrentThread("glam-decode");

@@ -70,8 +70,8 @@ struct MappingOptions {
   // the image motion (FeatureStageOptions::max_detection_interval) between the automatic one
   // and one detection per max_detection_seconds, aiming at detection_motion_fraction of the
   // image diagonal (median keypoint displacement) between detections. Off by default: on the
-  // robustness clips 1 s at 3 % saved ~30 % of the detections and of the run time but cost
-  // 7.5 % in the sum of the calibrated ATEs (a take-off climb 0.034 -> 0.098 m) and moved
+  // robustness clips 1 s at 3 % saved 29 % of the detections and 6-14 % of the wall time where
+  // it stretched, but cost 7.5 % in the sum of the calibrated ATEs (a take-off climb 0.034 -> 0.098 m) and moved
   // uncalibrated focal estimates both ways (docs/benchmarks.md, "Adaptive detection schedule").
   double max_detection_seconds = 0;
   double detection_motion_fraction = 0.03;
