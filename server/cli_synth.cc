@@ -50,6 +50,13 @@ void RegisterSynthCommand(CLI::App& app) {
   cmd->add_option("--relief", options->relief, "Terrain relief amplitude (m)")->capture_default_str();
   cmd->add_option("--cell-size", options->cell_size, "Ground-truth heightfield cell (m)")->capture_default_str();
   cmd->add_option("--building-density", options->building_density, "0 = none, 1 = village")->capture_default_str();
+  cmd->add_option("--water", options->water_fraction,
+                  "Share of the ground that is open water (0..0.95): lakes and coasts whose ripples drift "
+                  "and glint in the sun, i.e. image content that moves on its own")
+      ->capture_default_str();
+  cmd->add_option("--cloud-shadows", options->cloud_shadow_fraction,
+                  "Share of the ground in the shadow of clouds (0..0.9) that the wind pushes across at 7 m/s")
+      ->capture_default_str();
   cmd->add_option("--crf", options->crf, "H.264 CRF (quality, lower is better)")->capture_default_str();
   cmd->add_option("--gps-noise", options->gps_noise_m,
                   "Also write video.SRT, the flight's GPS track in DJI's subtitle layout (glam map then "

@@ -20,6 +20,7 @@
 #include "engine/core/error.h"
 #include "engine/core/intrinsics_io.h"
 #include "engine/geo/gps_track.h"
+#include "tools/synth/dynamic_surface.h"
 #include "tools/synth/gps_srt_writer.h"
 #include "tools/synth/ground_truth_writer.h"
 #include "tools/synth/renderer.h"
@@ -492,6 +493,124 @@ TEST(SynthDeterminism, SameSeedSameWorldOtherSeedOtherWorld) {
   EXPECT_TRUE(!same_size || world3.surface().heights() != world1.surface().heights());
 }
 
+// Water and cloud shadows are the only parts of the world that change over time: rendered
+// twice from one pose, a static world gives the same image, water changes where it is (and
+// nowhere else), cloud shadows darken the ground and drift.
+int ChangedPixels(const cv::Mat& a, const cv::Mat& b, int min_difference) {
+  cv::Mat diff, grey;
+  cv::absdiff(a, b, diff);
+  cv::cvtColor(diff, grey, cv::COLOR_BGR2GRAY);
+  return cv::countNonZero(grey >= min_difference);
+}
+
+TEST(SynthDynamicSurface, WaterCoversTheRequestedShareOfTheArea) {
+  SynthOptions o = SmallOptions();
+  for (const double fraction : {0.2, 0.5, 0.8}) {
+    o.water_fraction = fraction;
+    const DynamicSurface dynamic(o, -300, -200, 300, 200);
+    int water = 0, sand = 0, n = 0;
+    for (double y = -199; y < 200; y += 4) {
+      for (double x = -299; x < 300; x += 4) {
+        water += dynamic.WaterCover(x, y) >= 0.5;
+        sand += dynamic.WaterCover(x, y) < 0.5 && dynamic.ShoreSand(x, y) > 0.5;
+        ++n;
+      }
+    }
+    EXPECT_NEAR(static_cast<double>(water) / n, fraction, 0.02) << fraction;
+    EXPECT_GT(sand, 0) << "a beach along the shore";
+    EXPECT_LT(static_cast<double>(sand) / n, 0.1) << fraction;
+  }
+  o.water_fraction = 0;
+  const DynamicSurface dry(o, -300, -200, 300, 200);
+  EXPECT_FALSE(dry.has_water());
+  EXPECT_EQ(dry.WaterCover(0, 0), 0.0);
+  EXPECT_EQ(dry.CloudShadow(0, 0, 5.0), 0.0);
+}
+
+TEST(SynthDynamicSurface, WaterMovesOverTimeAndTheLandDoesNot) {
+  SynthOptions o = SmallOptions();
+  o.water_fraction = 0.5;
+  o.frames = 10;
+  const std::vector<SE3> poses = MakeTrajectory(o, Terrain(o));
+  const World world = World::Generate(o, poses);
+  const Renderer renderer(world, MakeIntrinsics(o));
+  // A frame that sees both water and land (half the area the flight sees is water).
+  int chosen = -1;
+  double share = 0;
+  for (int f = 0; f < o.frames && chosen < 0; ++f) {
+    renderer.Render(poses[f], 0.0, &share);
+    if (share > 0.15 && share < 0.85) chosen = f;
+  }
+  ASSERT_GE(chosen, 0) << "no view of the shore found";
+  const cv::Mat at0 = renderer.Render(poses[chosen], 0.0, &share);
+  const cv::Mat at0_again = renderer.Render(poses[chosen], 0.0);
+  const cv::Mat at1 = renderer.Render(poses[chosen], 1.0);
+  EXPECT_EQ(ChangedPixels(at0, at0_again, 1), 0) << "deterministic";
+  const double pixels = static_cast<double>(at0.total());
+  const double changed = ChangedPixels(at0, at1, 1) / pixels;
+  // The ripples changed most of the water; the land (the rest, but the shore's blend) not at all.
+  EXPECT_GT(changed, 0.5 * share);
+  EXPECT_LT(changed, share + 0.05);
+
+  SynthOptions dry = o;
+  dry.water_fraction = 0;
+  const World dry_world = World::Generate(dry, poses);
+  const Renderer dry_renderer(dry_world, MakeIntrinsics(dry));
+  EXPECT_EQ(ChangedPixels(dry_renderer.Render(poses[chosen], 0.0), dry_renderer.Render(poses[chosen], 1.0), 1), 0)
+      << "a world without water or clouds is static";
+}
+
+TEST(SynthDynamicSurface, CloudShadowsCoverTheRequestedShareAndDriftWithTheWind) {
+  SynthOptions o = SmallOptions();
+  o.cloud_shadow_fraction = 0.4;
+  const DynamicSurface dynamic(o, -300, -200, 300, 200);
+  EXPECT_NEAR(dynamic.wind().norm(), 7.0, 1e-9);
+  int shaded = 0, n = 0;
+  for (double y = -199; y < 200; y += 4) {
+    for (double x = -299; x < 300; x += 4) {
+      const double now = dynamic.CloudShadow(x, y, 0.0);
+      shaded += now >= 0.5;
+      ++n;
+      // The same shadow 3 s later, carried by the wind.
+      const Eigen::Vector2d later = Eigen::Vector2d(x, y) + 3.0 * dynamic.wind();
+      EXPECT_NEAR(dynamic.CloudShadow(later.x(), later.y(), 3.0), now, 1e-9);
+    }
+  }
+  EXPECT_NEAR(static_cast<double>(shaded) / n, 0.4, 0.02);
+}
+
+TEST(SynthDynamicSurface, CloudShadowsOnlyDarkenTheImage) {
+  SynthOptions o = SmallOptions();
+  o.frames = 10;
+  const std::vector<SE3> poses = MakeTrajectory(o, Terrain(o));
+  SynthOptions cloudy = o;
+  cloudy.cloud_shadow_fraction = 0.5;
+  const World sunny_world = World::Generate(o, poses);
+  const World cloudy_world = World::Generate(cloudy, poses);
+  const Renderer sunny(sunny_world, MakeIntrinsics(o));
+  const Renderer shaded(cloudy_world, MakeIntrinsics(cloudy));
+  int darker = 0;
+  int drifted = 0;
+  for (int f = 0; f < o.frames; f += 3) {
+    const cv::Mat s = sunny.Render(poses[f], 0.0);
+    const cv::Mat c = shaded.Render(poses[f], 0.0);
+    cv::Mat brighter, dimmed;
+    cv::compare(c, s + cv::Scalar::all(1), brighter, cv::CMP_GT);
+    EXPECT_EQ(cv::countNonZero(brighter.reshape(1)), 0) << "a shadow never brightens";
+    cv::Mat grey_s, grey_c;
+    cv::cvtColor(s, grey_s, cv::COLOR_BGR2GRAY);
+    cv::cvtColor(c, grey_c, cv::COLOR_BGR2GRAY);
+    grey_s.convertTo(grey_s, CV_32F);
+    grey_c.convertTo(grey_c, CV_32F);
+    cv::compare(grey_c, 0.8 * grey_s, dimmed, cv::CMP_LT);
+    darker += cv::countNonZero(dimmed);
+    // 5 s later at 7 m/s the shadows have moved 35 m.
+    drifted += ChangedPixels(c, shaded.Render(poses[f], 5.0), 4);
+  }
+  EXPECT_GT(darker, 0);
+  EXPECT_GT(drifted, 0);
+}
+
 TEST(SynthOptions, DefaultsAreValid) { EXPECT_NO_THROW(SynthOptions().Check()); }
 
 TEST(SynthOptions, CheckRejectsNonsense) {
@@ -522,11 +641,16 @@ TEST(SynthOptions, CheckRejectsNonsense) {
   rejects([](SynthOptions& o) { o.tilt_seconds = -1; });
   rejects([](SynthOptions& o) { o.rolling_shutter_ms = -1; });
   rejects([](SynthOptions& o) { o.rolling_shutter_ms = 40; });  // longer than a frame at 30 fps
+  rejects([](SynthOptions& o) { o.water_fraction = 0.99; });         // nothing left to map
+  rejects([](SynthOptions& o) { o.water_fraction = -0.1; });
+  rejects([](SynthOptions& o) { o.cloud_shadow_fraction = 1.0; });
   EXPECT_THROW(ParseTrajectoryKind("zigzag"), InputError);
   SynthOptions rolling;
   rolling.rolling_shutter_ms = 30;
   EXPECT_TRUE(rolling.ToJson().contains("rolling_shutter_ms"));
   EXPECT_FALSE(SynthOptions().ToJson().contains("rolling_shutter_ms"));  // older clips stay up to date
+  EXPECT_FALSE(SynthOptions().ToJson().contains("water_fraction"));
+  EXPECT_FALSE(SynthOptions().ToJson().contains("cloud_shadow_fraction"));
   EXPECT_EQ(ParseTrajectoryKind("orbit"), TrajectoryKind::kOrbit);
 }
 

@@ -111,7 +111,7 @@ cv::Vec3f Renderer::WallAlbedo(const RayHit& hit, const Building& b, double foot
 }
 
 Renderer::Sample Renderer::Shade(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir,
-                                 double pixel_angle) const {
+                                 double pixel_angle, double time_s) const {
   Sample s;
   RayHit hit;
   if (!world_.surface().Intersect(origin, dir, kMaxDistance, &hit)) {
@@ -145,16 +145,35 @@ Renderer::Sample Renderer::Shade(const Eigen::Vector3d& origin, const Eigen::Vec
   } else {
     albedo = SampleAlbedo(hit.point.x(), hit.point.y(), footprint);
   }
-  const double light = 0.45 + 0.6 * std::max(0.0, hit.normal.dot(sun_));
+  const DynamicSurface& dynamic = world_.dynamic();
+  const double shadow = dynamic.CloudShadow(hit.point.x(), hit.point.y(), time_s);
+  const double light = 0.45 + 0.6 * std::max(0.0, hit.normal.dot(sun_)) * (1.0 - 0.85 * shadow);
+  if (building > 0 || !dynamic.has_water()) {
+    s.color = albedo * static_cast<float>(light);
+    return s;
+  }
+  const double water = dynamic.WaterCover(hit.point.x(), hit.point.y());
+  if (water < 1) {
+    const double sand = dynamic.ShoreSand(hit.point.x(), hit.point.y());
+    albedo += static_cast<float>(sand) * (DynamicSurface::ShoreColor() - albedo);
+  }
   s.color = albedo * static_cast<float>(light);
+  if (water > 0) {
+    const cv::Vec3f surface = dynamic.ShadeWater(hit.point, dir, footprint, time_s, sun_, kSky) *
+                              static_cast<float>(1.0 - 0.4 * shadow);
+    s.color += static_cast<float>(water) * (surface - s.color);
+    s.water = water >= 0.5;
+  }
   return s;
 }
 
-cv::Mat Renderer::Render(const SE3& world_from_cam) const {
-  return Render(std::vector<SE3>(static_cast<std::size_t>(camera_.intrinsics().height), world_from_cam));
+cv::Mat Renderer::Render(const SE3& world_from_cam, double time_s, double* water_share) const {
+  return Render(std::vector<SE3>(static_cast<std::size_t>(camera_.intrinsics().height), world_from_cam),
+                time_s, water_share);
 }
 
-cv::Mat Renderer::Render(const std::vector<SE3>& world_from_cam_of_row) const {
+cv::Mat Renderer::Render(const std::vector<SE3>& world_from_cam_of_row, double time_s,
+                         double* water_share) const {
   const int w = camera_.intrinsics().width;
   const int h = camera_.intrinsics().height;
   GLAM_CHECK(world_from_cam_of_row.size() == static_cast<std::size_t>(h),
@@ -169,10 +188,10 @@ cv::Mat Renderer::Render(const std::vector<SE3>& world_from_cam_of_row) const {
       for (int x = 0; x < w; ++x) {
         const std::size_t k = static_cast<std::size_t>(y) * w + x;
         const Eigen::Vector3d dir = rotation * rays_[k].cast<double>();
-        const Sample s = Shade(origin, dir, pixel_angle_[k]);
+        const Sample s = Shade(origin, dir, pixel_angle_[k], time_s);
         color.at<cv::Vec3f>(y, x) = s.color;
         depth[k] = s.depth;
-        material[k] = static_cast<unsigned char>(s.material);
+        material[k] = static_cast<unsigned char>(s.material + (s.water ? 4 : 0));
       }
     }
   });
@@ -198,7 +217,7 @@ cv::Mat Renderer::Render(const std::vector<SE3>& world_from_cam_of_row) const {
           for (const auto& off : kOffsets) {
             const Eigen::Vector3d ray =
                 camera_.Unproject(Eigen::Vector2d(x + off[0], y + off[1])).normalized();
-            c += Shade(origin, rotation * ray, 0.5 * pixel_angle_[k]).color;
+            c += Shade(origin, rotation * ray, 0.5 * pixel_angle_[k], time_s).color;
           }
           c *= 0.2f;
         }
@@ -208,6 +227,10 @@ cv::Mat Renderer::Render(const std::vector<SE3>& world_from_cam_of_row) const {
       }
     }
   });
+  if (water_share != nullptr) {
+    const auto water_pixels = std::count_if(material.begin(), material.end(), [](unsigned char m) { return m >= 4; });
+    *water_share = static_cast<double>(water_pixels) / static_cast<double>(material.size());
+  }
   return out;
 }
 

@@ -34,7 +34,8 @@ bool UpToDate(const SynthOptions& o, const fs::path& dir) {
   }
   try {
     std::ifstream in(dir / "synth.json");
-    const nlohmann::json old = nlohmann::json::parse(in);
+    nlohmann::json old = nlohmann::json::parse(in);
+    if (old.is_object()) old.erase("water_share_seen");  // measured, not an option
     return old == o.ToJson() && (!o.write_frames || fs::exists(dir / "frames"));
   } catch (const nlohmann::json::exception&) {
     return false;
@@ -89,7 +90,10 @@ SynthReport RunSynth(const SynthOptions& o) {
   const int block_frames = std::max(1, 1000000 / o.height);
   std::vector<SE3> row_poses;
   int block_start = 0;
+  double water_share_sum = 0;
   for (int f = 0; f < o.frames; ++f) {
+    const double time_s = static_cast<double>(f) / o.fps;
+    double water_share = 0;
     if (rolling && (f == 0 || f >= block_start + block_frames)) {
       block_start = f;
       const int block_end = std::min(o.frames, f + block_frames);
@@ -103,8 +107,10 @@ SynthReport RunSynth(const SynthOptions& o) {
     const cv::Mat frame =
         rolling ? renderer.Render(std::vector<SE3>(
                       row_poses.begin() + static_cast<std::ptrdiff_t>(f - block_start) * o.height,
-                      row_poses.begin() + static_cast<std::ptrdiff_t>(f - block_start + 1) * o.height))
-                : renderer.Render(poses[f]);
+                      row_poses.begin() + static_cast<std::ptrdiff_t>(f - block_start + 1) * o.height),
+                  time_s, &water_share)
+                : renderer.Render(poses[f], time_s, &water_share);
+    water_share_sum += water_share;
     video.Write(frame);
     if (o.write_frames) {
       cv::imwrite((dir / "frames" / fmt::format("{:06d}.png", f)).string(), frame);
@@ -117,6 +123,12 @@ SynthReport RunSynth(const SynthOptions& o) {
   report.render_seconds = Seconds(t1);
 
   nlohmann::json meta = o.ToJson();
+  report.water_share_seen = water_share_sum / o.frames;
+  if (o.water_fraction > 0) {
+    meta["water_share_seen"] = report.water_share_seen;
+    GLAM_LOG_INFO("synth: open water covers {:.1f} % of the pixels on average",
+                  100.0 * report.water_share_seen);
+  }
   WriteJson(meta, dir / "synth.json");
   GLAM_LOG_INFO("synth: wrote {} ({} frames, world {:.1f} s, render {:.1f} s)", dir.string(),
                 o.frames, report.world_seconds, report.render_seconds);

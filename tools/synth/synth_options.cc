@@ -92,6 +92,8 @@ void SynthOptions::Check() const {
   CheckInRange("synth.relief", relief, 0.0, 200.0);
   CheckInRange("synth.cell_size", cell_size, 0.1, 2.0);
   CheckInRange("synth.building_density", building_density, 0.0, 3.0);
+  CheckInRange("synth.water_fraction", water_fraction, 0.0, 0.95);
+  CheckInRange("synth.cloud_shadow_fraction", cloud_shadow_fraction, 0.0, 0.9);
   CheckInRange("synth.crf", crf, 0, 51);
   if (gps_noise_m > 100) throw InputError("synth.gps_noise_m must be at most 100 m (negative: no GPS track)");
   // Distortion must stay invertible (monotonic radius) over the image corners, otherwise
@@ -142,6 +144,8 @@ nlohmann::json SynthOptions::ToJson() const {
     j["tilt_seconds"] = tilt_seconds;
   }
   if (rolling_shutter_ms > 0) j["rolling_shutter_ms"] = rolling_shutter_ms;
+  if (water_fraction > 0) j["water_fraction"] = water_fraction;
+  if (cloud_shadow_fraction > 0) j["cloud_shadow_fraction"] = cloud_shadow_fraction;
   return j;
 }
 

@@ -63,6 +63,11 @@ struct SynthOptions {
   double relief = 12.0;            // terrain height amplitude (m), heights lie in about +-relief
   double cell_size = 0.5;          // ground-truth heightfield resolution (m)
   double building_density = 1.0;   // 0 = no buildings, 1 = default village density
+  // Things that move on their own (dynamic_surface.h): the share of the ground that is open
+  // water (lakes and coasts; drifting ripples, sun glints) and the share in the shadow of
+  // clouds the wind pushes across at 7 m/s. 0 = none (a static world).
+  double water_fraction = 0.0;
+  double cloud_shadow_fraction = 0.0;
 
   // --- output ---
   std::string out;          // output directory (required by the CLI)

@@ -362,7 +362,8 @@ bool Overlaps(const Building& a, const Building& b, double gap) {
 }
 
 std::vector<Building> PlaceBuildings(const SynthOptions& o, const Bounds& bounds,
-                                     const std::vector<Road>& roads, Rng& rng) {
+                                     const std::vector<Road>& roads, const DynamicSurface& dynamic,
+                                     Rng& rng) {
   std::vector<Building> placed;
   if (o.building_density <= 0) return placed;
   const std::uint64_t seed = Mix64(o.seed * 13 + 3);
@@ -382,6 +383,9 @@ std::vector<Building> PlaceBuildings(const SynthOptions& o, const Bounds& bounds
       for (const auto& c : corners) {
         if (DistanceToRoad(road, c) < 0.5 * road.width + 2.5) return;
       }
+    }
+    for (const auto& c : corners) {  // no houses in the water or on the beach
+      if (dynamic.ShoreSand(c.x(), c.y()) > 0) return;
     }
     placed.push_back(b);
   };
@@ -609,10 +613,11 @@ World World::Generate(const SynthOptions& o, const std::vector<SE3>& poses) {
   const int rows = static_cast<int>(std::ceil((bounds.y1 - bounds.y0) / o.cell_size)) + 1;
   world.surface_ = Heightfield(Eigen::Vector2d(bounds.x0, bounds.y0), o.cell_size, cols, rows);
   FillTerrain(o, &world.surface_);
+  world.dynamic_ = std::make_shared<const DynamicSurface>(o, bounds.x0, bounds.y0, bounds.x1, bounds.y1);
 
   Rng rng(Mix64(o.seed * 1009 + 1));
   const std::vector<Road> roads = MakeRoads(bounds, rng);
-  world.buildings_ = PlaceBuildings(o, bounds, roads, rng);
+  world.buildings_ = PlaceBuildings(o, bounds, roads, *world.dynamic_, rng);
   RaiseBuildings(&world.buildings_, &world.surface_, &world.building_id_);
   world.surface_.BuildPyramid();
 

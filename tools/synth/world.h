@@ -8,12 +8,14 @@
 // are one cell wide there); the renderer shades them procedurally from the Building table.
 #pragma once
 
+#include <memory>
 #include <vector>
 
 #include <opencv2/core.hpp>
 
 #include "engine/core/camera.h"
 #include "engine/core/se3.h"
+#include "tools/synth/dynamic_surface.h"
 #include "tools/synth/heightfield.h"
 #include "tools/synth/synth_options.h"
 
@@ -47,6 +49,8 @@ class World {
   static World Generate(const SynthOptions& options, const std::vector<SE3>& poses);
 
   const Heightfield& surface() const { return surface_; }
+  // Water and cloud shadows (the parts of the world that change over time).
+  const DynamicSurface& dynamic() const { return *dynamic_; }
   const std::vector<Building>& buildings() const { return buildings_; }
 
   // Building index + 1 at heightfield vertex (i, j), 0 = open ground.
@@ -61,6 +65,7 @@ class World {
 
  private:
   Heightfield surface_;
+  std::shared_ptr<const DynamicSurface> dynamic_;
   std::vector<int> building_id_;
   std::vector<Building> buildings_;
   std::vector<cv::Mat> albedo_;
