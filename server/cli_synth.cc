@@ -54,6 +54,10 @@ void RegisterSynthCommand(CLI::App& app) {
                   "Share of the ground that is open water (0..0.95): lakes and coasts whose ripples drift "
                   "and glint in the sun, i.e. image content that moves on its own")
       ->capture_default_str();
+  cmd->add_option("--water-renewal", options->water_renewal_s,
+                  "Seconds over which the water's ripples renew themselves (wind ripples); 0 = they only "
+                  "drift, like foam on a river current")
+      ->capture_default_str();
   cmd->add_option("--cloud-shadows", options->cloud_shadow_fraction,
                   "Share of the ground in the shadow of clouds (0..0.9) that the wind pushes across at 7 m/s")
       ->capture_default_str();

@@ -527,6 +527,41 @@ TEST(SynthDynamicSurface, WaterCoversTheRequestedShareOfTheArea) {
   EXPECT_EQ(dry.CloudShadow(0, 0, 5.0), 0.0);
 }
 
+// Seen coarsely (a footprint of 0.45 m keeps only the 2 m ripples, which drift at
+// (0.6, 0.25) m/s), water without renewal is the same pattern carried along; with renewal it
+// is a different pattern after two renewal periods.
+TEST(SynthDynamicSurface, RipplesDriftAndRenew) {
+  auto correlation_after_drift = [](double renewal_s) {
+    SynthOptions o = SmallOptions();
+    o.water_fraction = 0.9;
+    o.water_renewal_s = renewal_s;
+    const DynamicSurface dynamic(o, -100, -100, 100, 100);
+    const Eigen::Vector3d down(0, 0, -1);
+    const Eigen::Vector3d sun = Eigen::Vector3d(1, 0, 0.2).normalized();  // no glint straight down
+    const cv::Vec3f sky(0.9f, 0.85f, 0.8f);
+    const double t = 3.0;
+    std::vector<double> a, b;
+    for (double y = -20; y < 20; y += 0.37) {
+      for (double x = -20; x < 20; x += 0.37) {
+        a.push_back(dynamic.ShadeWater({x, y, 0}, down, 0.45, 0.0, sun, sky)[0]);
+        b.push_back(dynamic.ShadeWater({x + 0.6 * t, y + 0.25 * t, 0}, down, 0.45, t, sun, sky)[0]);
+      }
+    }
+    const double ma = std::accumulate(a.begin(), a.end(), 0.0) / a.size();
+    const double mb = std::accumulate(b.begin(), b.end(), 0.0) / b.size();
+    double sab = 0, saa = 0, sbb = 0;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      sab += (a[i] - ma) * (b[i] - mb);
+      saa += (a[i] - ma) * (a[i] - ma);
+      sbb += (b[i] - mb) * (b[i] - mb);
+    }
+    EXPECT_GT(saa, 0.0) << "the ripples show";
+    return sab / std::sqrt(saa * sbb);
+  };
+  EXPECT_GT(correlation_after_drift(0.0), 0.999) << "a river's foam only drifts";
+  EXPECT_LT(std::abs(correlation_after_drift(1.5)), 0.3) << "wind ripples come and go";
+}
+
 TEST(SynthDynamicSurface, WaterMovesOverTimeAndTheLandDoesNot) {
   SynthOptions o = SmallOptions();
   o.water_fraction = 0.5;

@@ -53,7 +53,8 @@ constexpr Ripple kRipples[3] = {{2.0, 0.60, 0.25, 0.5}, {0.9, -0.35, 0.55, 0.3},
 }  // namespace
 
 DynamicSurface::DynamicSurface(const SynthOptions& o, double x0, double y0, double x1, double y1)
-    : water_seed_(Mix64(o.seed * 7919 + 5)),
+    : renewal_s_(o.water_renewal_s),
+      water_seed_(Mix64(o.seed * 7919 + 5)),
       ripple_seed_(Mix64(o.seed * 7927 + 11)),
       cloud_seed_(Mix64(o.seed * 7933 + 17)) {
   const double wind_heading = 2.0 * 3.14159265358979 * Uniform01(cloud_seed_ + 1);
@@ -102,9 +103,25 @@ cv::Vec3f DynamicSurface::ShadeWater(const Eigen::Vector3d& p, const Eigen::Vect
     const double u = (p.x() - r.vx * t) / r.wavelength;
     const double v = (p.y() - r.vy * t) / r.wavelength;
     const std::uint64_t s = ripple_seed_ + 31ULL * k;
-    height += keep * r.amplitude * ValueNoise(u, v, s);
-    slope_x += keep * r.amplitude * ValueNoise(u + 17.3, v, s + 1);
-    slope_y += keep * r.amplitude * ValueNoise(u, v + 29.1, s + 2);
+    // Renewal: the layer cross-fades from one pattern to the next every renewal_s seconds
+    // (layers out of step), so a ripple is recognisable for about that long.
+    double w = 0;
+    std::uint64_t s0 = s;
+    std::uint64_t s1 = s;
+    if (renewal_s_ > 0) {
+      const double phase = t / renewal_s_ + 0.37 * k;
+      const double cycle = std::floor(phase);
+      w = Smoothstep01(phase - cycle);
+      s0 = s + 1000003ULL * static_cast<std::uint64_t>(cycle);
+      s1 = s0 + 1000003ULL;
+    }
+    auto noise = [&](double a, double b, std::uint64_t offset) {
+      const double n0 = ValueNoise(a, b, s0 + offset);
+      return w > 0 ? n0 + w * (ValueNoise(a, b, s1 + offset) - n0) : n0;
+    };
+    height += keep * r.amplitude * noise(u, v, 0);
+    slope_x += keep * r.amplitude * noise(u + 17.3, v, 1);
+    slope_y += keep * r.amplitude * noise(u, v + 29.1, 2);
   }
   // The sky mirrored more at grazing angles (Schlick's Fresnel term, normal up).
   const double cos_incidence = std::clamp(std::abs(dir.z()), 0.0, 1.0);

@@ -39,6 +39,9 @@ class DynamicSurface {
   // Colour of the water surface at `point` seen along unit ray `dir` at time `t` (s):
   // a dark body, the sky reflected more at grazing angles, drifting ripples (filtered by the
   // pixel footprint so they do not alias) and sun glints where a ripple mirrors the sun.
+  // The ripples drift at 0.3-0.65 m/s and, unless SynthOptions::water_renewal_s is 0, renew
+  // themselves over that many seconds (wind ripples come and go; foam on a river current
+  // only drifts).
   cv::Vec3f ShadeWater(const Eigen::Vector3d& point, const Eigen::Vector3d& dir, double footprint,
                        double t, const Eigen::Vector3d& sun, const cv::Vec3f& sky) const;
 
@@ -52,6 +55,7 @@ class DynamicSurface {
   double CloudShadow(double x, double y, double t) const;
 
  private:
+  double renewal_s_ = 0;
   bool has_water_ = false;
   bool has_clouds_ = false;
   double water_threshold_ = 0;

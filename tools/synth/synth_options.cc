@@ -94,6 +94,7 @@ void SynthOptions::Check() const {
   CheckInRange("synth.building_density", building_density, 0.0, 3.0);
   CheckInRange("synth.water_fraction", water_fraction, 0.0, 0.95);
   CheckInRange("synth.cloud_shadow_fraction", cloud_shadow_fraction, 0.0, 0.9);
+  CheckInRange("synth.water_renewal_s", water_renewal_s, 0.0, 600.0);
   CheckInRange("synth.crf", crf, 0, 51);
   if (gps_noise_m > 100) throw InputError("synth.gps_noise_m must be at most 100 m (negative: no GPS track)");
   // Distortion must stay invertible (monotonic radius) over the image corners, otherwise
@@ -144,7 +145,10 @@ nlohmann::json SynthOptions::ToJson() const {
     j["tilt_seconds"] = tilt_seconds;
   }
   if (rolling_shutter_ms > 0) j["rolling_shutter_ms"] = rolling_shutter_ms;
-  if (water_fraction > 0) j["water_fraction"] = water_fraction;
+  if (water_fraction > 0) {
+    j["water_fraction"] = water_fraction;
+    j["water_renewal_s"] = water_renewal_s;
+  }
   if (cloud_shadow_fraction > 0) j["cloud_shadow_fraction"] = cloud_shadow_fraction;
   return j;
 }

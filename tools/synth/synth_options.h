@@ -68,6 +68,10 @@ struct SynthOptions {
   // clouds the wind pushes across at 7 m/s. 0 = none (a static world).
   double water_fraction = 0.0;
   double cloud_shadow_fraction = 0.0;
+  // Seconds over which the water's ripple pattern renews itself (wind ripples: 1-2 s);
+  // 0 = a pattern that only drifts, like foam on a river current (the harder case: it is a
+  // second rigid scene moving under the camera).
+  double water_renewal_s = 1.5;
 
   // --- output ---
   std::string out;          // output directory (required by the CLI)
