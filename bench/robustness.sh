@@ -2,10 +2,13 @@
 # Robustness over flights and cameras the tests do not use (docs/benchmarks.md, "Robustness
 # over flights and cameras").
 #
-# Renders twenty synthetic 600-frame clips at 640x360 with `glam synth` (skipped when already
-# rendered; seeds 41-52, 54-59, 66, 67, used by no test), each changing one thing from the
-# lawnmower at 100 m: speed, altitude, lens, distortion, trajectory, terrain, compression,
-# pitch, frame rate, a take-off climb, the horizon in view (75 and 80 deg from nadir, turning);
+# Renders twenty-four synthetic 600-frame clips at 640x360 with `glam synth` (skipped when
+# already rendered; seeds 41-52, 54-59, 66, 67, 81, 83-85, used by no test), each changing one
+# thing from the lawnmower at 100 m: speed, altitude, lens, distortion, trajectory, terrain,
+# compression, pitch, frame rate, a take-off climb, the horizon in view (75 and 80 deg from
+# nadir, turning), content that moves on its own (open water with drifting ripples that renew
+# themselves: lakes, and a coast where the first seconds are mostly water; the same coast with
+# ripples that only drift, like foam on a current; drifting cloud shadows at 100 and 40 m);
 # and derives five more from the lawnmower clip with ffmpeg filters (an on-screen display,
 # exposure flicker, defocus, motion blur, a 3 s freeze of the stream). Maps each one as a user
 # without a calibration would (`glam map`, no intrinsics: the
@@ -17,8 +20,9 @@
 # Usage: bench/robustness.sh [BUILD_DIR]   (default build; outputs in out/bench/robustness)
 # Variants: GLAM_MAP_ARGS="--detect-every 9" adds options to every `glam map`, and
 # RUN_TAG=name keeps that variant's outputs apart (out/bench/robustness/CLIP/uncalibrated-name);
-# RUNS=calibrated maps with the true intrinsics only.
-# Takes ~5 minutes on 2 cores (~10 with CALIBRATED=1).
+# RUNS=calibrated maps with the true intrinsics only; ONLY="clip ..." runs those clips only.
+# Takes ~12 minutes per kind of run on 2 cores (~25 with CALIBRATED=1), plus ~25 minutes of
+# rendering the first time.
 set -euo pipefail
 BUILD_DIR="${1:-build}"
 GLAM="$BUILD_DIR/server/glam"
@@ -47,8 +51,13 @@ declare -A CLIP=(
   [climb]="--trajectory lawnmower --climb-from 30 --seed 59"
   [horizon]="--trajectory lawnmower --pitch-deg 75 --altitude 60 --seed 66"
   [horizon_loop]="--trajectory loop --pitch-deg 80 --altitude 40 --seed 67"
+  [lakes]="--trajectory lawnmower --water 0.3 --seed 84"
+  [coast]="--trajectory lawnmower --water 0.3 --seed 85"
+  [coast_current]="--trajectory lawnmower --water 0.3 --water-renewal 0 --seed 85"
+  [clouds]="--trajectory lawnmower --cloud-shadows 0.4 --seed 81"
+  [clouds_low]="--trajectory loop --altitude 40 --cloud-shadows 0.4 --seed 83"
 )
-ORDER="lawnmower fast low wide_lens narrow_lens distorted barrel_mild pincushion orbit_barrel high_barrel wide_barrel orbit flat crf32 pitch60 high fps24 climb horizon horizon_loop"
+ORDER="lawnmower fast low wide_lens narrow_lens distorted barrel_mild pincushion orbit_barrel high_barrel wide_barrel orbit flat crf32 pitch60 high fps24 climb horizon horizon_loop lakes coast coast_current clouds clouds_low"
 # Derived from the lawnmower clip by an ffmpeg filter (Debian's ffmpeg, re-encoded at CRF 16);
 # the ground truth is copied, and where the filter changes what a frame shows, adjusted.
 declare -A DERIVED=(
@@ -65,6 +74,8 @@ printf "|---|---|---|---|---|---|---|---|---|---|---|\n"
 # derive NAME: WORK/NAME/gt from WORK/lawnmower/gt through DERIVED[NAME] (skipped when done).
 derive() {
   local name=$1 src="$WORK/lawnmower/gt" dst="$WORK/$1/gt"
+  # shellcheck disable=SC2086  # the clip's arguments are words
+  [ -f "$src/video.mp4" ] || "$GLAM" --log-level warn synth $BASE ${CLIP[lawnmower]} --out "$src" > /dev/null
   [ -f "$dst/video.mp4" ] && [ "$dst/video.mp4" -nt "$src/video.mp4" ] && return 0
   mkdir -p "$dst"
   cp "$src"/*.json "$src"/*.f32 "$dst"/
@@ -96,7 +107,11 @@ open(dst, "w").write("\n".join(header + out) + "\n")
 PY
 }
 
-for name in $ORDER $DERIVED_ORDER; do
+for name in ${ONLY:-$ORDER $DERIVED_ORDER}; do
+  if [ -z "${CLIP[$name]:-}" ] && [ -z "${DERIVED[$name]:-}" ]; then
+    echo "robustness.sh: unknown clip '$name' (clips: $ORDER $DERIVED_ORDER)" >&2
+    exit 2
+  fi
   if [ -n "${CLIP[$name]:-}" ]; then
     # shellcheck disable=SC2086  # the clip's arguments are words
     "$GLAM" --log-level warn synth $BASE ${CLIP[$name]} --out "$WORK/$name/gt" > /dev/null
