@@ -32,6 +32,7 @@ const JOB_TIMEOUT_MS = 180_000;
 const KEYFRAMES_PER_SUBMAP = 4;
 // A path smoothing other than the default, entered in the form, must reach the job options.
 const SMOOTH_WINDOW_S = 0.3;
+const DETECT_MAX_SECONDS = 0.2;
 // A preview interval other than the default (1 s), entered in the form, must reach the job.
 const PREVIEW_INTERVAL_S = 0.5;
 // The product's default budget, sent explicitly: checks that the form's field reaches the job.
@@ -253,6 +254,8 @@ async function main() {
     await page.click('#upload-form summary');
     await page.fill('#upload-form input[name=keyframes_per_submap]', String(KEYFRAMES_PER_SUBMAP));
     await page.fill('#upload-form input[name=smooth_window_s]', String(SMOOTH_WINDOW_S));
+    // The adaptive schedule's longest gap, at the automatic interval (so the map is as without).
+    await page.fill('#upload-form input[name=detect_max_seconds]', String(DETECT_MAX_SECONDS));
     await page.fill('#upload-form input[name=preview_interval_s]', String(PREVIEW_INTERVAL_S));
     // The form refuses an option that cannot apply before uploading anything: refining the
     // focal of intrinsics that were not given.
@@ -431,6 +434,8 @@ async function main() {
     check(JSON.stringify(shownWarnings) === JSON.stringify(job.warnings || []),
       `job table warnings ${JSON.stringify(shownWarnings)} == job JSON warnings ${JSON.stringify(job.warnings)}`);
     console.log(`job table: ${shownWarnings.length} warning(s) shown`);
+    check(job.options && job.options.detect_max_seconds === DETECT_MAX_SECONDS,
+      `the form's longest detection gap reached the job: options.detect_max_seconds ${job.options && job.options.detect_max_seconds} == ${DETECT_MAX_SECONDS}`);
     check(job.options && job.options.smooth_window_s === SMOOTH_WINDOW_S,
       `the form's path smoothing reached the job: options.smooth_window_s ${job.options && job.options.smooth_window_s} == ${SMOOTH_WINDOW_S}`);
     check(job.options && job.options.preview_interval_s === PREVIEW_INTERVAL_S,

@@ -73,6 +73,7 @@ async function collectOptions(form) {
     if (form.elements[key].checked) options[key] = true;
   }
   for (const [key, label, max] of [['smooth_window_s', 'path smoothing', 5],
+    ['detect_max_seconds', 'the longest gap between detections', 10],
     ['preview_interval_s', 'the preview interval', 60]]) {
     const text = form.elements[key].value.trim();
     if (!text) continue;
