@@ -511,8 +511,9 @@ TEST(SynthDynamicSurface, WaterCoversTheRequestedShareOfTheArea) {
     int water = 0, sand = 0, n = 0;
     for (double y = -199; y < 200; y += 4) {
       for (double x = -299; x < 300; x += 4) {
-        water += dynamic.WaterCover(x, y) >= 0.5;
-        sand += dynamic.WaterCover(x, y) < 0.5 && dynamic.ShoreSand(x, y) > 0.5;
+        const DynamicSurface::Shore shore = dynamic.ShoreAt(x, y);
+        water += shore.water >= 0.5;
+        sand += shore.water < 0.5 && shore.sand > 0.5;
         ++n;
       }
     }
@@ -523,7 +524,7 @@ TEST(SynthDynamicSurface, WaterCoversTheRequestedShareOfTheArea) {
   o.water_fraction = 0;
   const DynamicSurface dry(o, -300, -200, 300, 200);
   EXPECT_FALSE(dry.has_water());
-  EXPECT_EQ(dry.WaterCover(0, 0), 0.0);
+  EXPECT_EQ(dry.ShoreAt(0, 0).water, 0.0);
   EXPECT_EQ(dry.CloudShadow(0, 0, 5.0), 0.0);
 }
 

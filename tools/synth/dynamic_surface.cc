@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <vector>
 
 #include "tools/synth/noise.h"
@@ -46,8 +47,9 @@ struct Ripple {
   double vx, vy;      // drift (m/s)
   double amplitude;
 };
-// Three drifting layers in different directions: the pattern changes shape as it moves,
-// like wind ripples, rather than sliding rigidly.
+// Three layers drifting in different directions (each also renews itself unless
+// SynthOptions::water_renewal_s is 0; then the coarse layer dominates from high up and the
+// pattern mostly slides, like foam on a current).
 constexpr Ripple kRipples[3] = {{2.0, 0.60, 0.25, 0.5}, {0.9, -0.35, 0.55, 0.3}, {0.4, 0.20, -0.50, 0.2}};
 
 }  // namespace
@@ -57,7 +59,7 @@ DynamicSurface::DynamicSurface(const SynthOptions& o, double x0, double y0, doub
       water_seed_(Mix64(o.seed * 7919 + 5)),
       ripple_seed_(Mix64(o.seed * 7927 + 11)),
       cloud_seed_(Mix64(o.seed * 7933 + 17)) {
-  const double wind_heading = 2.0 * 3.14159265358979 * Uniform01(cloud_seed_ + 1);
+  const double wind_heading = 2.0 * std::numbers::pi * Uniform01(cloud_seed_ + 1);
   wind_ = kWindSpeed * Eigen::Vector2d(std::cos(wind_heading), std::sin(wind_heading));
   if (o.water_fraction > 0) {
     has_water_ = true;
@@ -73,16 +75,11 @@ DynamicSurface::DynamicSurface(const SynthOptions& o, double x0, double y0, doub
   }
 }
 
-double DynamicSurface::WaterCover(double x, double y) const {
-  if (!has_water_) return 0;
+DynamicSurface::Shore DynamicSurface::ShoreAt(double x, double y) const {
+  if (!has_water_) return {};
   const double v = Fbm(x, y, kWaterWavelength, 4, 0.5, water_seed_);
-  return Smoothstep01((water_threshold_ + kWaterEdge - v) / (2 * kWaterEdge));
-}
-
-double DynamicSurface::ShoreSand(double x, double y) const {
-  if (!has_water_) return 0;
-  const double v = Fbm(x, y, kWaterWavelength, 4, 0.5, water_seed_);
-  return Smoothstep01((water_threshold_ + kSandBand - v) / kSandBand);
+  return {Smoothstep01((water_threshold_ + kWaterEdge - v) / (2 * kWaterEdge)),
+          Smoothstep01((water_threshold_ + kSandBand - v) / kSandBand)};
 }
 
 cv::Vec3f DynamicSurface::ShoreColor() { return cv::Vec3f(0.50f, 0.62f, 0.68f); }  // BGR

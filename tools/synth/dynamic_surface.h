@@ -33,8 +33,14 @@ class DynamicSurface {
   // Cloud drift (m/s, world x and y).
   const Eigen::Vector2d& wind() const { return wind_; }
 
-  // 1 on open water, 0 on land, in between on the shore (a ~2 m band of wet sand).
-  double WaterCover(double x, double y) const;
+  // The coast at ground point (x, y), both from one evaluation of the water field:
+  // `water` is 1 on open water, 0 on land and in between at the ~1 m soft waterline; `sand`
+  // is 1 at the waterline fading to 0 ~3 m inland (the band the renderer paints as sand).
+  struct Shore {
+    double water = 0;
+    double sand = 0;
+  };
+  Shore ShoreAt(double x, double y) const;
 
   // Colour of the water surface at `point` seen along unit ray `dir` at time `t` (s):
   // a dark body, the sky reflected more at grazing angles, drifting ripples (filtered by the
@@ -45,8 +51,6 @@ class DynamicSurface {
   cv::Vec3f ShadeWater(const Eigen::Vector3d& point, const Eigen::Vector3d& dir, double footprint,
                        double t, const Eigen::Vector3d& sun, const cv::Vec3f& sky) const;
 
-  // 1 at the waterline fading to 0 ~3 m inland: the band the renderer paints as sand.
-  double ShoreSand(double x, double y) const;
   // Sand colour of the shore band.
   static cv::Vec3f ShoreColor();
 

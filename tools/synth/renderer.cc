@@ -15,6 +15,9 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 constexpr double kMaxDistance = 20000;
+// Added to a pixel's material code when it shows open water (materials are 0-2), so the
+// silhouette pass also smooths the waterline and the water share is counted from the codes.
+constexpr unsigned char kWaterFlag = 4;
 const cv::Vec3f kSky(0.92f, 0.85f, 0.78f);      // BGR: pale hazy blue
 const cv::Vec3f kGlass(0.26f, 0.22f, 0.18f);
 
@@ -152,11 +155,9 @@ Renderer::Sample Renderer::Shade(const Eigen::Vector3d& origin, const Eigen::Vec
     s.color = albedo * static_cast<float>(light);
     return s;
   }
-  const double water = dynamic.WaterCover(hit.point.x(), hit.point.y());
-  if (water < 1) {
-    const double sand = dynamic.ShoreSand(hit.point.x(), hit.point.y());
-    albedo += static_cast<float>(sand) * (DynamicSurface::ShoreColor() - albedo);
-  }
+  const DynamicSurface::Shore shore = dynamic.ShoreAt(hit.point.x(), hit.point.y());
+  const double water = shore.water;
+  if (water < 1) albedo += static_cast<float>(shore.sand) * (DynamicSurface::ShoreColor() - albedo);
   s.color = albedo * static_cast<float>(light);
   if (water > 0) {
     const cv::Vec3f surface = dynamic.ShadeWater(hit.point, dir, footprint, time_s, sun_, kSky) *
@@ -191,7 +192,7 @@ cv::Mat Renderer::Render(const std::vector<SE3>& world_from_cam_of_row, double t
         const Sample s = Shade(origin, dir, pixel_angle_[k], time_s);
         color.at<cv::Vec3f>(y, x) = s.color;
         depth[k] = s.depth;
-        material[k] = static_cast<unsigned char>(s.material + (s.water ? 4 : 0));
+        material[k] = static_cast<unsigned char>(s.material + (s.water ? kWaterFlag : 0));
       }
     }
   });
@@ -228,7 +229,7 @@ cv::Mat Renderer::Render(const std::vector<SE3>& world_from_cam_of_row, double t
     }
   });
   if (water_share != nullptr) {
-    const auto water_pixels = std::count_if(material.begin(), material.end(), [](unsigned char m) { return m >= 4; });
+    const auto water_pixels = std::count_if(material.begin(), material.end(), [](unsigned char m) { return m >= kWaterFlag; });
     *water_share = static_cast<double>(water_pixels) / static_cast<double>(material.size());
   }
   return out;

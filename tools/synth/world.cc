@@ -385,7 +385,7 @@ std::vector<Building> PlaceBuildings(const SynthOptions& o, const Bounds& bounds
       }
     }
     for (const auto& c : corners) {  // no houses in the water or on the beach
-      if (dynamic.ShoreSand(c.x(), c.y()) > 0) return;
+      if (dynamic.ShoreAt(c.x(), c.y()).sand > 0) return;
     }
     placed.push_back(b);
   };
