@@ -478,6 +478,7 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   report.tracking_losses = stats.tracking_losses;
   report.frames_matched_globally = stats.frames_matched_globally;
   report.frames_rotation_only = stats.frames_rotation_only;
+  report.moving_landmarks_removed = stats.moving_landmarks_removed;
   report.submap_rebuilds = stats.submap_rebuilds;
   report.bootstrap_twin_checks = stats.bootstrap_twin_checks;
   report.bootstrap_twins_kept = stats.bootstrap_twins_kept;

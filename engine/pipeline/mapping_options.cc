@@ -70,6 +70,7 @@ void UsePaperMethod(MappingOptions* options) {
   submap.bootstrap_rotation_veto_fraction = 0;
   submap.bootstrap_twin_focal_step = 0;
   submap.hover_max_speed = 0;
+  submap.moving_landmark_frames = 0;
   submap.focal_profile_step = 0;
   submap.bundle_adjustment.refine_k1 = false;
   submap.epipolar_triangulation_matching = false;

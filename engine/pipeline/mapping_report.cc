@@ -249,6 +249,7 @@ nlohmann::json MappingReport::ToJson() const {
           {"tracking_losses", tracking_losses},
           {"frames_matched_globally", frames_matched_globally},
           {"frames_rotation_only", frames_rotation_only},
+          {"moving_landmarks_removed", moving_landmarks_removed},
           {"submap_rebuilds", submap_rebuilds},
           {"bootstrap_twin_checks", bootstrap_twin_checks},
           {"bootstrap_twins_kept", bootstrap_twins_kept},

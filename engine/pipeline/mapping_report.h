@@ -64,6 +64,9 @@ struct MappingReport {
   std::int64_t frames_matched_globally = 0;
   // Frames posed by rotation only through a hovering yaw (SubmapOptions::hover_max_speed).
   std::int64_t frames_rotation_only = 0;
+  // Landmarks removed as lying on content that moves on its own (water, cloud-shadow edges;
+  // SubmapOptions::moving_landmark_frames).
+  std::int64_t moving_landmarks_removed = 0;
   std::int64_t submap_rebuilds = 0;  // submaps tracked again after the focal estimate moved
   // Open submaps tracked again from the other motion of a focal-dependent bootstrap, and how
   // many of those second builds were kept (SubmapOptions::bootstrap_twin_focal_step).

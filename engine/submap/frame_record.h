@@ -58,6 +58,15 @@ struct FrameRecord {
   std::optional<SE3> cam_from_submap;  // set when tracking posed the frame
   // (feature index, landmark id) of the PnP inliers.
   std::vector<std::pair<int, std::uint32_t>> landmark_matches;
+  // Descriptor matches PnP rejected: the landmark and its reprojection residual under the
+  // frame's pose (observed minus projected, px). A landmark on content that moves on its own
+  // (water ripples, cloud-shadow edges) is rejected frame after frame with a residual that
+  // keeps its direction and grows (SubmapOptions::moving_landmark_frames).
+  struct RejectedMatch {
+    std::uint32_t landmark_id = 0;
+    Eigen::Vector2f residual_px = Eigen::Vector2f::Zero();
+  };
+  std::vector<RejectedMatch> rejected_matches;
   // Set when the frame was posed by rotation only (SubmapOptions::hover_max_speed: a hovering
   // drone yawing to ground no landmark covers): its rotation relative to the frame before it
   // in the open submap, whose centre it shares. Such a frame has no landmark matches and never
@@ -68,6 +77,7 @@ struct FrameRecord {
   void ResetPose() {
     cam_from_submap.reset();
     landmark_matches.clear();
+    rejected_matches.clear();
     cam_from_previous_rotation.reset();
   }
   // The submap's record of this posed frame (cam_from_submap must be set).

@@ -257,7 +257,21 @@ std::size_t SubmapBuilder::TriangulateBetween(std::size_t first_position, std::s
   return added;
 }
 
+void SubmapBuilder::RemoveMovingLandmarks() {
+  if (open_.moving_landmarks.empty()) return;
+  const std::size_t before = open_.landmarks.size();
+  std::erase_if(open_.landmarks, [&](const Landmark& lm) { return open_.moving_landmarks.contains(lm.id); });
+  for (std::uint32_t id : open_.moving_landmarks) {
+    open_.rejections.erase(id);
+    open_.extras.erase(id);
+  }
+  open_.moving_landmarks.clear();
+  stats_.moving_landmarks_removed += static_cast<std::int64_t>(before - open_.landmarks.size());
+  GLAM_LOG_DEBUG("removed {} landmarks on moving content", before - open_.landmarks.size());
+}
+
 void SubmapBuilder::OptimiseAndFilter() {
+  RemoveMovingLandmarks();
   BundleAdjustmentOptions ba = options_.bundle_adjustment;
   ba.focal_prior_px = focal_;  // the running median (see BundleAdjustmentOptions)
   // Local only with the camera fixed: a focal or k1 still being estimated couples every

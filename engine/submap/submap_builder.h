@@ -19,6 +19,7 @@
 #include <deque>
 #include <optional>
 #include <unordered_map>
+#include <unordered_set>
 #include <vector>
 
 #include "engine/core/camera.h"
@@ -42,6 +43,8 @@ struct SubmapBuilderStats {
   // Tracked frames whose guided matching around the predicted pose failed, so they were
   // matched against every landmark of the open submap (25-70 ms each; posed or not).
   std::int64_t frames_matched_globally = 0;
+  // Landmarks removed as lying on moving content (SubmapOptions::moving_landmark_frames).
+  std::int64_t moving_landmarks_removed = 0;
   std::int64_t frames_rotation_only = 0;  // posed by rotation only (SubmapOptions::hover_max_speed)
   std::int64_t submap_rebuilds = 0;  // open submaps tracked again after a focal or k1 change
   // SubmapOptions::bootstrap_twin_*: open submaps tracked again from the other motion of a
@@ -130,6 +133,16 @@ class SubmapBuilder {
     std::vector<Landmark> landmarks;
     std::unordered_map<std::uint32_t, LandmarkExtra> extras;
     std::uint32_t next_landmark_id = 0;
+    // SubmapOptions::moving_landmark_frames: per landmark, the run of consecutive tracked
+    // frames whose PnP rejected it with a residual that kept its direction and grew, and the
+    // latest residual; the landmarks whose run reached the option, removed at the next
+    // bundle adjustment.
+    struct Rejections {
+      int frames = 0;
+      Eigen::Vector2f residual_px = Eigen::Vector2f::Zero();
+    };
+    std::unordered_map<std::uint32_t, Rejections> rejections;
+    std::unordered_set<std::uint32_t> moving_landmarks;
     // Landmarks with smaller ids have passed the isolated-point filter once (OptimiseAndFilter).
     std::uint32_t first_unfiltered_landmark_id = 0;
     int tau_resection = 0;
@@ -263,6 +276,10 @@ class SubmapBuilder {
 
   // tracking.cc: poses `record` against the landmarks; false if tracking is lost.
   bool Track(FrameRecord& record);
+  // SubmapOptions::moving_landmark_frames: updates the rejection runs with the posed `record`.
+  void FollowRejectedLandmarks(const FrameRecord& record);
+  // Removes the landmarks FollowRejectedLandmarks found moving (before an adjustment).
+  void RemoveMovingLandmarks();
   // `predicted` is taken by value: callers pass record.cam_from_submap itself (relocalisation
   // from the tracked pose), which Localise clears first.
   bool Localise(FrameRecord& record, std::optional<SE3> predicted) const;

@@ -41,6 +41,8 @@ void SubmapOptions::Check() const {
   CheckInRange("SubmapOptions.match_ratio", match_ratio, 0.1, 1.0);
   CheckInRange("SubmapOptions.epipolar_match_ratio", epipolar_match_ratio, 0.1, 1.0);
   CheckGreater("SubmapOptions.pnp_threshold_pixels", pnp_threshold_pixels, 0.0);
+  CheckInRange("SubmapOptions.moving_landmark_frames", moving_landmark_frames, 0, 1000);
+  CheckInRange("SubmapOptions.moving_landmark_min_cos", moving_landmark_min_cos, -1.0, 1.0);
   CheckInRange("SubmapOptions.min_triangulation_angle_deg", min_triangulation_angle_deg, 0.0, 45.0);
   CheckInRange("SubmapOptions.max_keyframe_parallax_deg", max_keyframe_parallax_deg, 0.0, 90.0);
   CheckInRange("SubmapOptions.min_map_coverage", min_map_coverage, 0.0, 1.0);

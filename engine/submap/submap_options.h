@@ -76,6 +76,16 @@ struct SubmapOptions {
   double match_radius_fraction = 0.04;
   double match_ratio = 0.8;            // Lowe's ratio for descriptor matches
   double pnp_threshold_pixels = 3.0;   // RANSAC inlier threshold (processing resolution)
+  // Landmarks on content that moves on its own. A ripple on water or the edge of a cloud
+  // shadow drifts 1-3 px between keyframes, inside every threshold, so it is triangulated like
+  // ground; as it drifts on, tracking keeps matching its descriptor and PnP rejects it, with a
+  // residual that points the way it drifts and grows. A landmark that PnP rejects in this many
+  // consecutive tracked frames, each residual within acos(moving_landmark_min_cos) of the
+  // previous one's direction and longer than it, is removed from the open submap before the
+  // next bundle adjustment (ORB-SLAM culls on the share of frames that find a landmark; a
+  // mismatch, by contrast, has residuals in random directions). 0 = off (the paper).
+  int moving_landmark_frames = 3;
+  double moving_landmark_min_cos = 0.8;
 
   // --- hovering yaw (tracking_rotation.cc) ---
   // A drone that stops and yaws in place with an oblique camera turns its view to ground no

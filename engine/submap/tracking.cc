@@ -42,6 +42,7 @@ bool SubmapBuilder::Track(FrameRecord& record) {
   bool matched_globally = false;
   const bool posed = LocaliseGuidedFirst(record, PredictPose(record), &matched_globally);
   if (matched_globally) ++stats_.frames_matched_globally;
+  if (posed) FollowRejectedLandmarks(record);
   return posed;
 }
 
@@ -105,11 +106,34 @@ bool SubmapBuilder::Localise(FrameRecord& record, std::optional<SE3> predicted) 
 
   record.cam_from_submap = result.model;
   for (std::size_t i = 0; i < matches.size(); ++i) {
-    if (!result.inlier_mask[i]) continue;
-    record.landmark_matches.emplace_back(matches[i].train,
-                                         open_.landmarks[candidate_landmarks[matches[i].query]].id);
+    const std::uint32_t id = open_.landmarks[candidate_landmarks[matches[i].query]].id;
+    if (result.inlier_mask[i]) {
+      record.landmark_matches.emplace_back(matches[i].train, id);
+      continue;
+    }
+    Eigen::Vector2d projected;
+    if (!camera.Project(result.model * points3d[i], &projected)) continue;
+    record.rejected_matches.push_back({id, (pixels[i] - projected).cast<float>()});
   }
   return true;
+}
+
+void SubmapBuilder::FollowRejectedLandmarks(const FrameRecord& record) {
+  if (options_.moving_landmark_frames == 0) return;
+  for (const auto& [feature, id] : record.landmark_matches) {
+    open_.rejections.erase(id);
+    open_.moving_landmarks.erase(id);  // an inlier again: it was the pose that had drifted
+  }
+  for (const FrameRecord::RejectedMatch& r : record.rejected_matches) {
+    OpenSubmap::Rejections& run = open_.rejections[r.landmark_id];
+    const float norm = r.residual_px.norm();
+    const float last_norm = run.residual_px.norm();
+    const bool drifting = run.frames > 0 && norm > last_norm &&
+                          r.residual_px.dot(run.residual_px) > options_.moving_landmark_min_cos * norm * last_norm;
+    run.frames = drifting ? run.frames + 1 : 1;
+    run.residual_px = r.residual_px;
+    if (run.frames >= options_.moving_landmark_frames) open_.moving_landmarks.insert(r.landmark_id);
+  }
 }
 
 }  // namespace glam

@@ -56,6 +56,7 @@ class SubmapBuilderOnSyntheticClip : public ::testing::Test {
       options.max_keyframe_parallax_deg = 0;
       options.bootstrap_accept_parallax_deg = 0;
       options.isolated_filter_once = false;
+      options.moving_landmark_frames = 0;
       options.duplicate_check_in_view = false;  // as UsePaperMethod (measured here: map median 0.258 m, 0.329 m with it on)
       sift.grid_cols = 0;
     }
