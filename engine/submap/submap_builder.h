@@ -133,10 +133,10 @@ class SubmapBuilder {
     std::vector<Landmark> landmarks;
     std::unordered_map<std::uint32_t, LandmarkExtra> extras;
     std::uint32_t next_landmark_id = 0;
-    // SubmapOptions::moving_landmark_frames: per landmark, the run of consecutive tracked
-    // frames whose PnP rejected it with a residual that kept its direction and grew, and the
-    // latest residual; the landmarks whose run reached the option, removed at the next
-    // bundle adjustment.
+    // SubmapOptions::moving_landmark_frames: per landmark, its run of PnP rejections in a row
+    // whose residual kept its direction and grew (frames that do not match it do not end the
+    // run, an inlier does) and the latest residual; the landmarks whose run reached the
+    // option, removed before the next bundle adjustment unless an inlier again by then.
     struct Rejections {
       int frames = 0;
       Eigen::Vector2f residual_px = Eigen::Vector2f::Zero();

@@ -42,6 +42,10 @@ void SubmapOptions::Check() const {
   CheckInRange("SubmapOptions.epipolar_match_ratio", epipolar_match_ratio, 0.1, 1.0);
   CheckGreater("SubmapOptions.pnp_threshold_pixels", pnp_threshold_pixels, 0.0);
   CheckInRange("SubmapOptions.moving_landmark_frames", moving_landmark_frames, 0, 1000);
+  if (moving_landmark_frames == 1) {
+    throw InputError("SubmapOptions.moving_landmark_frames must be 0 (off) or at least 2: the direction "
+                     "and growth of a residual are judged against the previous rejection's");
+  }
   CheckInRange("SubmapOptions.moving_landmark_min_cos", moving_landmark_min_cos, -1.0, 1.0);
   CheckInRange("SubmapOptions.min_triangulation_angle_deg", min_triangulation_angle_deg, 0.0, 45.0);
   CheckInRange("SubmapOptions.max_keyframe_parallax_deg", max_keyframe_parallax_deg, 0.0, 90.0);

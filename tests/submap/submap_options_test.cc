@@ -27,6 +27,20 @@ TEST(SubmapOptions, RejectsABadEpipolarRatio) {
   ExpectRejected(o, "epipolar_match_ratio");
 }
 
+TEST(SubmapOptions, RejectsBadMovingLandmarkOptions) {
+  SubmapOptions o;
+  o.moving_landmark_frames = -1;
+  ExpectRejected(o, "moving_landmark_frames");
+  o.moving_landmark_frames = 1;  // one rejection has no direction to keep
+  ExpectRejected(o, "moving_landmark_frames");
+  o = {};
+  o.moving_landmark_min_cos = 1.5;
+  ExpectRejected(o, "moving_landmark_min_cos");
+  o = {};
+  o.moving_landmark_frames = 0;  // the paper: every landmark is kept
+  EXPECT_NO_THROW(o.Check());
+}
+
 TEST(SubmapOptions, RejectsBadFocalOptions) {
   SubmapOptions o;
   o.rebuild_focal_change = -0.01;
