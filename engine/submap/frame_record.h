@@ -61,7 +61,8 @@ struct FrameRecord {
   // Descriptor matches PnP rejected: the landmark and its reprojection residual under the
   // frame's pose (observed minus projected, px). A landmark on content that moves on its own
   // (water ripples, cloud-shadow edges) is rejected frame after frame with a residual that
-  // keeps its direction and grows (SubmapOptions::moving_landmark_frames).
+  // keeps its direction and grows (SubmapOptions::moving_landmark_frames; empty when that is
+  // off).
   struct RejectedMatch {
     std::uint32_t landmark_id = 0;
     Eigen::Vector2f residual_px = Eigen::Vector2f::Zero();

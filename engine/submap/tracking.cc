@@ -111,6 +111,7 @@ bool SubmapBuilder::Localise(FrameRecord& record, std::optional<SE3> predicted) 
       record.landmark_matches.emplace_back(matches[i].train, id);
       continue;
     }
+    if (options_.moving_landmark_frames == 0) continue;  // only FollowRejectedLandmarks reads them
     Eigen::Vector2d projected;
     if (!camera.Project(result.model * points3d[i], &projected)) continue;
     record.rejected_matches.push_back({id, (pixels[i] - projected).cast<float>()});
