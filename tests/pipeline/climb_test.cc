@@ -10,13 +10,9 @@
 
 #include <gtest/gtest.h>
 
-#include "engine/core/intrinsics_io.h"
 #include "engine/export/tum_trajectory.h"
 #include "engine/map/submap_io.h"
-#include "engine/pipeline/mapping_job.h"
-#include "engine/pipeline/mapping_options.h"
-#include "tests/support/temp_dir.h"
-#include "tools/eval/evaluation.h"
+#include "tests/support/mapped_fixture.h"
 
 namespace glam {
 namespace {
@@ -41,19 +37,16 @@ struct MappedClip {
   int climb_keyframes = 0;  // keyframes of submap 0 taken during the climb
 };
 
-MappedClip MapAndEvaluate(MappingOptions options, bool calibrated, const std::string& name) {
-  if (calibrated) UseCalibration(&options, ReadIntrinsicsJson(kClip / "intrinsics.json"));
-  const fs::path out = testing::FreshTempDir("climb_" + name);
-  fs::remove_all(out);
-  RunMapping(kClip / "video.mp4", out, options);
-  MappedClip run{eval::EvaluateDirectories(kClip, out, {}), 0};
+MappedClip MapAndEvaluate(const MappingOptions& options, bool calibrated, const std::string& name) {
   const std::int64_t last_climb_frame = LastClimbFrame();
-  for (const Keyframe& keyframe : ReadSubmap(out / "submaps", 0).keyframes) {
-    if (keyframe.frame_index <= last_climb_frame) ++run.climb_keyframes;
-  }
+  MappedClip run;
+  run.result = test_support::MapFixture(kClip, options, calibrated, name, [&](const fs::path& out) {
+                 for (const Keyframe& keyframe : ReadSubmap(out / "submaps", 0).keyframes) {
+                   if (keyframe.frame_index <= last_climb_frame) ++run.climb_keyframes;
+                 }
+               }).result;
   std::cout << name << ": " << run.climb_keyframes << " keyframes in the climb (frames 0-" << last_climb_frame
-            << "), " << eval::Summary(run.result) << "\n";
-  fs::remove_all(out);
+            << ")\n";
   return run;
 }
 

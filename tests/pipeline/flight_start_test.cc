@@ -5,18 +5,13 @@
 // disconnected. Ground truth: the fixture's trajectory (`glam eval`).
 #include <filesystem>
 #include <fstream>
-#include <iostream>
 #include <string>
-#include <vector>
+#include <utility>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "engine/core/intrinsics_io.h"
-#include "engine/pipeline/mapping_job.h"
-#include "engine/pipeline/mapping_options.h"
-#include "tests/support/temp_dir.h"
-#include "tools/eval/evaluation.h"
+#include "tests/support/mapped_fixture.h"
 
 namespace glam {
 namespace {
@@ -25,32 +20,17 @@ namespace fs = std::filesystem;
 
 const fs::path kClip = fs::path(GLAM_TEST_FIXTURES_DIR) / "tilt_start";
 
-struct MappedClip {
-  eval::EvaluationResult result;
+struct MappedClip : test_support::MappedFixture {
   nlohmann::json graph;
-  nlohmann::json report;
-  std::vector<eval::EvaluationResult> parts;  // parts/<n>/, n = 1, 2, ...
 };
 
-MappedClip MapAndEvaluate(MappingOptions options, const std::string& name) {
-  UseCalibration(&options, ReadIntrinsicsJson(kClip / "intrinsics.json"));
-  const fs::path out = testing::FreshTempDir("flight_start_" + name);
-  fs::remove_all(out);
-  RunMapping(kClip / "video.mp4", out, options);
-  MappedClip run;
-  run.result = eval::EvaluateDirectories(kClip, out, {});
-  std::ifstream graph(out / "graph.json");
-  run.graph = nlohmann::json::parse(graph);
-  std::ifstream report(out / "report.json");
-  run.report = nlohmann::json::parse(report);
-  std::cout << name << ": " << eval::Summary(run.result) << "\n";
-  for (const nlohmann::json& part : run.report.at("parts")) {
-    run.parts.push_back(eval::EvaluateDirectories(kClip, out / part.at("directory").get<std::string>(), {}));
-    std::cout << name << ", " << part.at("directory").get<std::string>() << ": "
-              << eval::Summary(run.parts.back()) << "\n";
-  }
-  fs::remove_all(out);
-  return run;
+MappedClip MapAndEvaluate(const MappingOptions& options, const std::string& name) {
+  nlohmann::json graph;
+  test_support::MappedFixture run = test_support::MapFixture(kClip, options, true, name, [&](const fs::path& out) {
+    std::ifstream in(out / "graph.json");
+    graph = nlohmann::json::parse(in);
+  });
+  return {std::move(run), std::move(graph)};
 }
 
 TEST(FlightStart, AGimbalTiltingDownDoesNotLeaveTheFlightDisconnected) {
@@ -67,9 +47,9 @@ TEST(FlightStart, AGimbalTiltingDownDoesNotLeaveTheFlightDisconnected) {
   EXPECT_TRUE(first_disconnected) << "the tilt's fragment should be the disconnected part";
   // ... and it is still written, on its own (measured: frames 0-58, ATE 0.22 m in its frame).
   ASSERT_GE(run.parts.size(), 1u);
-  const nlohmann::json& part = run.report.at("parts").at(0);
-  EXPECT_EQ(part.at("first_frame").get<int>(), 0);
-  EXPECT_EQ(part.at("submaps").at(0).get<int>(), 0);
+  const PartExport& part = run.report.parts.at(0);
+  EXPECT_EQ(part.first_frame, 0);
+  EXPECT_EQ(part.submaps.at(0), 0u);
   EXPECT_GT(run.parts[0].trajectory.fraction_posed, 0.08);
   EXPECT_LT(run.parts[0].trajectory.ate_rmse, 0.5);
 

@@ -6,7 +6,6 @@
 // Ground truth: the fixtures' own trajectories, surfaces and focal (554.3 px).
 #include <cmath>
 #include <filesystem>
-#include <iostream>
 #include <optional>
 #include <string>
 
@@ -17,8 +16,7 @@
 #include "engine/pipeline/mapping_job.h"
 #include "engine/pipeline/mapping_report.h"
 #include "engine/pipeline/resume_checkpoint.h"
-#include "tests/support/temp_dir.h"
-#include "tools/eval/evaluation.h"
+#include "tests/support/mapped_fixture.h"
 
 namespace glam {
 namespace {
@@ -30,19 +28,11 @@ const fs::path kLoopClip = fs::path(GLAM_TEST_FIXTURES_DIR) / "loop";
 // Nadir lawnmower at 100 m: the same kind of view, but its first submap does prefer its focal.
 const fs::path kLawnmowerClip = fs::path(GLAM_TEST_FIXTURES_DIR) / "lawnmower_small";
 
-struct MappedClip {
-  MappingReport report;
-  eval::EvaluationResult result;
-};
+using test_support::MappedFixture;
 
 // Uncalibrated, as a user without intrinsics runs it: the focal starts at the default guess.
-MappedClip MapUncalibrated(const fs::path& clip, const MappingOptions& options, const std::string& name) {
-  const fs::path out = testing::FreshTempDir("focal_profile_" + name);
-  fs::remove_all(out);
-  MappedClip run{RunMapping(clip / "video.mp4", out, options), {}};
-  run.result = eval::EvaluateDirectories(clip, out, {});
-  std::cout << name << ": focal " << run.report.focal_original << " px, " << eval::Summary(run.result) << "\n";
-  return run;
+MappedFixture MapUncalibrated(const fs::path& clip, const MappingOptions& options, const std::string& name) {
+  return test_support::MapFixture(clip, options, false, name);
 }
 
 bool HasHeldWarning(const MappingReport& report) {
@@ -54,7 +44,7 @@ bool HasHeldWarning(const MappingReport& report) {
 
 TEST(FocalProfile, AnUndeterminedFocalIsHeldAtItsInitialValue) {
   const double truth = ReadIntrinsicsJson(kLoopClip / "intrinsics.json").fx;
-  const MappedClip held = MapUncalibrated(kLoopClip, MappingOptions(), "loop");
+  const MappedFixture held = MapUncalibrated(kLoopClip, MappingOptions(), "loop");
   ASSERT_TRUE(held.report.focal_profile_rms_increase.has_value());
   EXPECT_LT(*held.report.focal_profile_rms_increase, MappingOptions().submap.focal_profile_min_rms_increase);
   EXPECT_TRUE(held.report.focal_held);
@@ -82,7 +72,7 @@ TEST(FocalProfile, AnUndeterminedFocalIsHeldAtItsInitialValue) {
   // tests the case.
   MappingOptions free_focal;
   free_focal.submap.focal_profile_step = 0;
-  const MappedClip wandered = MapUncalibrated(kLoopClip, free_focal, "loop_free");
+  const MappedFixture wandered = MapUncalibrated(kLoopClip, free_focal, "loop_free");
   EXPECT_FALSE(wandered.report.focal_held);
   EXPECT_GT(std::abs(wandered.report.focal / truth - 1.0), 0.15) << wandered.report.focal;
   EXPECT_GT(wandered.result.trajectory.ate_rmse, 1.5 * held.result.trajectory.ate_rmse);
@@ -145,7 +135,7 @@ TEST(FocalProfile, CheckpointKeepsTheHeldFocalAndK1) {
 
 TEST(FocalProfile, ADeterminedFocalIsStillEstimated) {
   const double truth = ReadIntrinsicsJson(kLawnmowerClip / "intrinsics.json").fx;
-  const MappedClip run = MapUncalibrated(kLawnmowerClip, MappingOptions(), "lawnmower");
+  const MappedFixture run = MapUncalibrated(kLawnmowerClip, MappingOptions(), "lawnmower");
   ASSERT_TRUE(run.report.focal_profile_rms_increase.has_value());
   // Measured: +0.087 % for 10 % either side; the estimate 546.2 px (-1.4 %; 549.7 px before
   // landmarks on moving content were removed, SubmapOptions::moving_landmark_frames).

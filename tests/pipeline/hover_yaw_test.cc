@@ -4,17 +4,13 @@
 // rotation is degenerate and triangulates invented parallax (engine/geometry/rotation_only.h).
 // Ground truth: the fixture's own trajectory and surface (`glam eval`).
 #include <filesystem>
-#include <fstream>
-#include <iostream>
 #include <map>
 #include <string>
+#include <utility>
 
 #include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
 
-#include "engine/pipeline/mapping_job.h"
-#include "tests/support/temp_dir.h"
-#include "tools/eval/evaluation.h"
+#include "tests/support/mapped_fixture.h"
 
 namespace glam {
 namespace {
@@ -23,32 +19,25 @@ namespace fs = std::filesystem;
 
 const fs::path kClip = fs::path(GLAM_TEST_FIXTURES_DIR) / "hover_yaw";
 
-// Output directory of a configuration: one per process (CTest runs the two tests below as
-// separate processes, at the same time under -j2, and both map "no_rotation_only").
-fs::path OutDir(const std::string& name) {
-  static std::map<std::string, fs::path> dirs;
-  if (const auto it = dirs.find(name); it != dirs.end()) return it->second;
-  return dirs.emplace(name, testing::FreshTempDir("hover_yaw_" + name)).first->second;
-}
+struct MappedClip : test_support::MappedFixture {
+  bool wrote_parts = false;  // a parts/ directory in the output
+};
 
 // Each configuration is mapped once per test process (the two tests share the run without
 // rotation-only poses when they run in one process).
-eval::EvaluationResult MapAndEvaluate(const MappingOptions& options, const std::string& name) {
-  static std::map<std::string, eval::EvaluationResult> done;
+const MappedClip& MapAndEvaluate(const MappingOptions& options, const std::string& name) {
+  static std::map<std::string, MappedClip> done;
   if (const auto it = done.find(name); it != done.end()) return it->second;
-  const fs::path out = OutDir(name);
-  fs::remove_all(out);
   // These tests compare how thread 1 poses the hovering frames, so the end-of-run global
   // refinement is off: on this clip it lowers the moving frames' error (0.169 -> 0.151 m) and
   // raises the hovering frames' (0.161 -> 0.246 m; docs/algorithm.md, global refinement), in
   // both configurations, which would blur the difference each test is about.
   MappingOptions rigid = options;
   rigid.global_refinement.max_keyframes = 0;
-  RunMapping(kClip / "video.mp4", out, rigid);  // uncalibrated: the focal is estimated
-  const eval::EvaluationResult result = eval::EvaluateDirectories(kClip, out, {});
-  std::cout << name << ": " << eval::Summary(result) << "\n";
-  done.emplace(name, result);
-  return result;
+  bool wrote_parts = false;
+  test_support::MappedFixture run = test_support::MapFixture(  // uncalibrated: the focal is estimated
+      kClip, rigid, false, name, [&](const fs::path& out) { wrote_parts = fs::exists(out / "parts"); });
+  return done.emplace(name, MappedClip{std::move(run), wrote_parts}).first->second;
 }
 
 MappingOptions WithoutRotationOnlyPoses() {
@@ -71,7 +60,7 @@ MappingOptions UnsettledAtTheHover() {
 }
 
 TEST(HoverYaw, NoSubmapStartsOnAPureRotation) {
-  const eval::EvaluationResult with_veto = MapAndEvaluate(UnsettledAtTheHover(), "unsettled");
+  const eval::EvaluationResult& with_veto = MapAndEvaluate(UnsettledAtTheHover(), "unsettled").result;
   ASSERT_TRUE(with_veto.map.has_value());
   // Measured: ATE 0.232 m, map median 0.256 m, 87.0 % of the 1200 frames posed (the yaws to
   // unseen ground cannot be) at 60 m, 45 deg oblique.
@@ -86,7 +75,7 @@ TEST(HoverYaw, NoSubmapStartsOnAPureRotation) {
   // bootstrap. If neither holds, the clip no longer tests the case.
   MappingOptions paper_bootstrap = UnsettledAtTheHover();
   paper_bootstrap.submap.bootstrap_rotation_veto_fraction = 0;
-  const eval::EvaluationResult without = MapAndEvaluate(paper_bootstrap, "no_veto");
+  const eval::EvaluationResult& without = MapAndEvaluate(paper_bootstrap, "no_veto").result;
   const bool placed_wrong = without.trajectory.ate_rmse > 3 * with_veto.trajectory.ate_rmse;
   const bool lost = without.trajectory.fraction_posed < with_veto.trajectory.fraction_posed - 0.15;
   EXPECT_TRUE(placed_wrong || lost) << "without the veto: ATE " << without.trajectory.ate_rmse << " m, "
@@ -97,8 +86,10 @@ TEST(HoverYaw, NoSubmapStartsOnAPureRotation) {
 // rotation only, at the hover's centre, instead of being lost. Control: without it they are
 // not posed at all.
 TEST(HoverYaw, YawsToUnseenGroundArePosedByRotationOnly) {
-  const eval::EvaluationResult without = MapAndEvaluate(WithoutRotationOnlyPoses(), "no_rotation_only");
-  const eval::EvaluationResult with = MapAndEvaluate(MappingOptions(), "default");
+  const MappedClip& without_run = MapAndEvaluate(WithoutRotationOnlyPoses(), "no_rotation_only");
+  const MappedClip& with_run = MapAndEvaluate(MappingOptions(), "default");
+  const eval::EvaluationResult& without = without_run.result;
+  const eval::EvaluationResult& with = with_run.result;
   ASSERT_TRUE(with.map.has_value());
   // Measured: 86.9 % -> 97.8 % posed, ATE 0.143 -> 0.127 m, map median 0.230 -> 0.198 m
   // (2026-12-07; first measured 87.0 -> 97.8 %, 0.22 -> 0.17 m): the chains hold the hover's
@@ -108,20 +99,16 @@ TEST(HoverYaw, YawsToUnseenGroundArePosedByRotationOnly) {
   EXPECT_LT(with.trajectory.ate_rmse, without.trajectory.ate_rmse * 1.1);
   EXPECT_LT(with.map->median, 0.35);
   // report.json counts them (measured 146 over the three yaws).
-  auto report_of = [](const std::string& name) {
-    std::ifstream in(OutDir(name) / "report.json");
-    return nlohmann::json::parse(in);
-  };
-  const nlohmann::json report = report_of("default");
-  EXPECT_EQ(report_of("no_rotation_only").at("frames_rotation_only").get<int>(), 0);
-  EXPECT_GT(report.at("frames_rotation_only").get<int>(), 90);
-  EXPECT_LT(report.at("frames_rotation_only").get<int>(), 300);
+  const MappingReport& report = with_run.report;
+  EXPECT_EQ(without_run.report.frames_rotation_only, 0);
+  EXPECT_GT(report.frames_rotation_only, 90);
+  EXPECT_LT(report.frames_rotation_only, 300);
   // The submap bootstrapped across the second yaw (frames 576-641: a frame before the yaw and
   // one after it) was left without landmarks by its completion filters and is discarded
   // instead of becoming a part of the flight without points (it did, before 2026-12-07).
-  EXPECT_EQ(report.at("disconnected_submaps").get<int>(), 0);
-  EXPECT_GE(report.at("submaps_discarded").get<int>(), 1);
-  EXPECT_FALSE(fs::exists(OutDir("default") / "parts"));
+  EXPECT_EQ(report.disconnected_submaps, 0);
+  EXPECT_GE(report.submaps_discarded, 1);
+  EXPECT_FALSE(with_run.wrote_parts);
 }
 
 }  // namespace

@@ -6,16 +6,12 @@
 // surface and intrinsics (k1 = -0.12).
 #include <cmath>
 #include <filesystem>
-#include <iostream>
 #include <string>
 
 #include <gtest/gtest.h>
 
 #include "engine/core/intrinsics_io.h"
-#include "engine/pipeline/mapping_job.h"
-#include "engine/pipeline/mapping_report.h"
-#include "tests/support/temp_dir.h"
-#include "tools/eval/evaluation.h"
+#include "tests/support/mapped_fixture.h"
 
 namespace glam {
 namespace {
@@ -24,26 +20,16 @@ namespace fs = std::filesystem;
 
 const fs::path kDistortedClip = fs::path(GLAM_TEST_FIXTURES_DIR) / "distorted";
 
-struct MappedClip {
-  MappingReport report;
-  eval::EvaluationResult result;
-};
+using test_support::MappedFixture;
 
-MappedClip MapUncalibrated(const MappingOptions& options, const std::string& name) {
-  const fs::path out = testing::FreshTempDir("radial_distortion_" + name);
-  fs::remove_all(out);
-  MappedClip run{RunMapping(kDistortedClip / "video.mp4", out, options), {}};
-  run.result = eval::EvaluateDirectories(kDistortedClip, out, {});
-  std::cout << name << ": focal " << run.report.focal << " px, k1 " << run.report.k1 << ", "
-            << eval::Summary(run.result) << "\n";
-  fs::remove_all(out);
-  return run;
+MappedFixture MapUncalibrated(const MappingOptions& options, const std::string& name) {
+  return test_support::MapFixture(kDistortedClip, options, false, name);
 }
 
 TEST(RadialDistortion, ABarrelLensGetsItsK1Estimated) {
   const Intrinsics truth = ReadIntrinsicsJson(kDistortedClip / "intrinsics.json");
   ASSERT_LT(truth.k1, -0.1);
-  const MappedClip run = MapUncalibrated(MappingOptions(), "estimated");
+  const MappedFixture run = MapUncalibrated(MappingOptions(), "estimated");
   // Measured: the profile +3.5 % (the threshold is 0.5 %), k1 -0.121, focal 562 px (+1.4 %),
   // ATE 0.09 m, map median 0.93 m.
   ASSERT_TRUE(run.report.k1_profile_rms_increase.has_value());
@@ -63,7 +49,7 @@ TEST(RadialDistortion, ABarrelLensGetsItsK1Estimated) {
   // the clip no longer tests the case.
   MappingOptions pinhole;
   pinhole.submap.bundle_adjustment.refine_k1 = false;
-  const MappedClip bent = MapUncalibrated(pinhole, "pinhole");
+  const MappedFixture bent = MapUncalibrated(pinhole, "pinhole");
   EXPECT_EQ(bent.report.k1, 0.0);
   EXPECT_FALSE(bent.report.k1_estimated);
   EXPECT_FALSE(bent.report.k1_profile_rms_increase.has_value());

@@ -6,16 +6,12 @@
 // was at the frame's middle row (engine/pipeline/rolling_shutter.h). Ground truth: the
 // fixture's trajectory and surface (`glam eval`; the truth is the middle row's pose).
 #include <filesystem>
-#include <iostream>
 #include <string>
 
 #include <gtest/gtest.h>
 
 #include "engine/core/intrinsics_io.h"
-#include "engine/pipeline/mapping_job.h"
-#include "engine/pipeline/mapping_options.h"
-#include "tests/support/temp_dir.h"
-#include "tools/eval/evaluation.h"
+#include "tests/support/mapped_fixture.h"
 
 namespace glam {
 namespace {
@@ -27,23 +23,13 @@ const fs::path kClip = fs::path(GLAM_TEST_FIXTURES_DIR) / "rolling_shutter";
 const fs::path kGlobalShutterClip = fs::path(GLAM_TEST_FIXTURES_DIR) / "lawnmower_small";
 constexpr double kReadoutMs = 30.0;  // the fixture's
 
-struct MappedClip {
-  eval::EvaluationResult result;
-  MappingReport report;
-};
+using test_support::MappedFixture;
 
-MappedClip MapAndEvaluate(const RollingShutterOptions& rolling_shutter, bool calibrated, const std::string& name,
-                          const fs::path& clip = kClip) {
+MappedFixture MapAndEvaluate(const RollingShutterOptions& rolling_shutter, bool calibrated, const std::string& name,
+                             const fs::path& clip = kClip) {
   MappingOptions options;
   options.rolling_shutter = rolling_shutter;
-  if (calibrated) UseCalibration(&options, ReadIntrinsicsJson(clip / "intrinsics.json"));
-  const fs::path out = testing::FreshTempDir("rolling_shutter_" + name);
-  MappedClip run;
-  run.report = RunMapping(clip / "video.mp4", out, options);
-  run.result = eval::EvaluateDirectories(clip, out, {});
-  std::cout << name << ": focal " << run.report.focal << " px, " << eval::Summary(run.result) << "\n";
-  fs::remove_all(out);
-  return run;
+  return test_support::MapFixture(clip, options, calibrated, name);
 }
 
 RollingShutterOptions Readout(double ms) {
@@ -63,7 +49,7 @@ TEST(RollingShutterMapping, TheReadoutGivenMapsAsWellAsAGlobalShutter) {
   // Measured: ATE 0.057 m, map median 0.09 m (calibrated); focal -0.13 %, ATE 0.055 m,
   // map median 0.12 m (uncalibrated). The same flight with a global shutter maps to about the
   // same (docs/benchmarks.md).
-  const MappedClip corrected = MapAndEvaluate(Readout(kReadoutMs), true, "calibrated");
+  const MappedFixture corrected = MapAndEvaluate(Readout(kReadoutMs), true, "calibrated");
   EXPECT_EQ(corrected.result.trajectory.fraction_posed, 1.0);
   EXPECT_LT(corrected.result.trajectory.ate_rmse, 0.12);
   ASSERT_TRUE(corrected.result.map.has_value());
@@ -73,14 +59,14 @@ TEST(RollingShutterMapping, TheReadoutGivenMapsAsWellAsAGlobalShutter) {
   EXPECT_GT(corrected.report.rolling_shutter_mean_shift_px, 0.2);
   EXPECT_LT(corrected.report.rolling_shutter_mean_shift_px, 2.0);
 
-  const MappedClip uncalibrated = MapAndEvaluate(Readout(kReadoutMs), false, "uncalibrated");
+  const MappedFixture uncalibrated = MapAndEvaluate(Readout(kReadoutMs), false, "uncalibrated");
   EXPECT_NEAR(uncalibrated.report.focal / truth_focal, 1.0, 0.02);
   EXPECT_LT(uncalibrated.result.trajectory.ate_rmse, 0.12);
 
   // The control, the shutter taken as global: measured ATE 0.72 m, map median 3.95 m
   // (calibrated); uncalibrated the focal came out 13.7 % long. If this stops being much worse,
   // the clip no longer tests the case.
-  const MappedClip control = MapAndEvaluate(Readout(0), true, "global_shutter_assumed");
+  const MappedFixture control = MapAndEvaluate(Readout(0), true, "global_shutter_assumed");
   EXPECT_EQ(control.report.rolling_shutter_ms, 0.0);
   EXPECT_GT(control.result.trajectory.ate_rmse, 4.0 * corrected.result.trajectory.ate_rmse);
   ASSERT_TRUE(control.result.map.has_value());
@@ -93,7 +79,7 @@ TEST(RollingShutterMapping, TheReadoutGivenMapsAsWellAsAGlobalShutter) {
 TEST(RollingShutterMapping, TheReadoutIsEstimatedAndAGlobalShutterRecognised) {
   const double truth_focal = ReadIntrinsicsJson(kClip / "intrinsics.json").fx;
   // Measured: 28.7 ms, focal +0.2 %, ATE 0.073 m, map median 0.08 m.
-  const MappedClip estimated = MapAndEvaluate(Estimated(), false, "estimated");
+  const MappedFixture estimated = MapAndEvaluate(Estimated(), false, "estimated");
   EXPECT_TRUE(estimated.report.rolling_shutter_estimated);
   EXPECT_TRUE(estimated.report.rolling_shutter_determined);
   EXPECT_NEAR(estimated.report.rolling_shutter_ms, kReadoutMs, 4.0);
@@ -102,11 +88,11 @@ TEST(RollingShutterMapping, TheReadoutIsEstimatedAndAGlobalShutterRecognised) {
   EXPECT_NEAR(estimated.report.focal / truth_focal, 1.0, 0.02);
   EXPECT_LT(estimated.result.trajectory.ate_rmse, 0.12);
 
-  const MappedClip global = MapAndEvaluate(Estimated(), true, "global_estimated", kGlobalShutterClip);
+  const MappedFixture global = MapAndEvaluate(Estimated(), true, "global_estimated", kGlobalShutterClip);
   EXPECT_TRUE(global.report.rolling_shutter_estimated);
   EXPECT_TRUE(global.report.rolling_shutter_determined);  // its profile rises from 0 ms at once
   EXPECT_EQ(global.report.rolling_shutter_ms, 0.0);
-  const MappedClip plain = MapAndEvaluate(Readout(0), true, "global_plain", kGlobalShutterClip);
+  const MappedFixture plain = MapAndEvaluate(Readout(0), true, "global_plain", kGlobalShutterClip);
   EXPECT_EQ(global.result.trajectory.ate_rmse, plain.result.trajectory.ate_rmse);
   EXPECT_EQ(global.report.keyframes, plain.report.keyframes);
 }
