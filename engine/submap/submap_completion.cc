@@ -219,6 +219,9 @@ void SubmapBuilder::CheckFixedFocal() {
 std::optional<Submap> SubmapBuilder::Complete() {
   const Camera camera = CurrentCamera();
   const std::size_t before = open_.landmarks.size();
+  // Landmarks found moving after the last keyframe's adjustment would otherwise stay in the
+  // submap and in the completion adjustment below.
+  RemoveMovingLandmarks();
   const std::size_t reprojection =
       RemoveReprojectionOutliers(camera.intrinsics(), open_.keyframes, open_.landmarks, options_.outlier_filter);
   const std::size_t isolated =
