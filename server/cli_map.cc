@@ -287,6 +287,11 @@ void RegisterMapCommand(CLI::App& app) {
                   "Adjust only the last N keyframes (and the landmarks they see) after each new "
                   "keyframe, the older ones held; 0 = the whole submap every time (the paper)")
       ->capture_default_str();
+  cmd->add_option("--moving-landmark-frames", args->options.submap.moving_landmark_frames,
+                  "Remove a landmark that PnP rejects in this many tracked frames in a row with a "
+                  "residual that keeps its direction and grows (water ripples, cloud-shadow "
+                  "edges); 0 = keep every landmark (the paper)")
+      ->capture_default_str();
   cmd->add_option("--feature-grid", args->options.sift.grid_cols,
                   "Spread each frame's SIFT features over a grid of this many columns (rows from "
                   "the aspect ratio), strongest first per cell; 0 = strongest over the frame (the paper)")
@@ -300,7 +305,7 @@ void RegisterMapCommand(CLI::App& app) {
   for (const char* name : {"--detect-every", "--feature-grid", "--keyframe-parallax", "--keyframe-coverage",
                            "--bootstrap-parallax", "--completion-ba-frames", "--smooth-window",
                            "--per-keyframe-focal", "--global-refinement-keyframes", "--rolling-shutter-ms",
-                           "--local-ba-keyframes"}) {
+                           "--local-ba-keyframes", "--moving-landmark-frames"}) {
     paper->excludes(name);
   }
   cmd->add_flag("--resume", args->options.resume,

@@ -11,14 +11,14 @@
 # default of `glam map` for image folders since this benchmark showed the difference), and the
 # last with `--refine-focal`: the EXIF focal is a guess, and COLMAP refines its own start too.
 # Usage: bench/real/run.sh [BUILD_DIR] [DATA_DIR]   (REUSE_COLMAP=1: keep an earlier COLMAP result)
-#   (defaults: build, ../shared/data/brighton_beach; needs bench/colmap/setup.sh)
+#   (defaults: build, data/brighton_beach, the copy in this project; needs bench/colmap/setup.sh)
 set -euo pipefail
 # Debian's python3 (numpy, matplotlib from bench/colmap/setup.sh), not a pyenv/venv one.
 PY="${PYTHON:-/usr/bin/python3}"
 BUILD_DIR="${1:-build}"
 HERE="$(cd "$(dirname "$0")" && pwd)"
 ROOT="$(cd "$HERE/../.." && pwd)"
-DATA="$(realpath "${2:-$ROOT/../shared/data/brighton_beach}")"
+DATA="$(realpath "${2:-$ROOT/data/brighton_beach}")"
 GLAM="$(realpath "$BUILD_DIR/server/glam")"
 OUT="$ROOT/out/bench/real"
 mkdir -p "$OUT"
