@@ -150,9 +150,9 @@ struct SubmapOptions {
   // that line and in front of both cameras (MatchAlongEpipolarLines,
   // engine/features/epipolar_matcher.h); false (default) = the paper: global descriptor
   // matching, then an essential-matrix RANSAC to select the consistent matches. On by
-  // UseCalibration (engine/pipeline/mapping_options.h), off otherwise: the lines are drawn with
-  // the camera model, and while the focal and k1 are still being estimated they miss the true
-  // matches (uncalibrated, on the 23 robustness clips: pitch60 and crf32 fell apart, 6 others
+  // UseCalibration (engine/pipeline/mapping_options.h), off otherwise, and used only while the
+  // focal and k1 are fixed (not with --refine-focal): the lines are drawn with the camera
+  // model, and while the focal and k1 are still being estimated they miss the true matches (uncalibrated, on the 23 robustness clips: pitch60 and crf32 fell apart, 6 others
   // got worse). Calibrated, on the loop benchmark video: 2.2 s of matching and RANSAC -> ~0.2 s;
   // ATE lower on two of the four benchmark videos, within 0.004 m on the others
   // (docs/benchmarks.md).
@@ -198,7 +198,9 @@ struct SubmapOptions {
   // videos, calibrated, interleaved with the whole adjustment: bundle adjustment 8.1 -> 5.7 s
   // (loop), builder 14.2 -> 11.4 s, wall -14 % (loop), -7 to -13 % (lawnmower), -2 to -4 %
   // (oblique), +-2 % (compressed); ATE within 0.001 m (compressed 0.149 -> 0.145 m); a window of
-  // 8 or 10 saved little, 2 cost ATE (loop 0.042 -> 0.047 m) (docs/benchmarks.md).
+  // 8 or 10 saved little, 2 cost ATE (loop 0.042 -> 0.047 m) (docs/benchmarks.md). RunMapping
+  // sets 0 for photo folders: each photo is a keyframe overlapping only its neighbours, and
+  // there the window drifted (Brighton Beach 0.58 -> 0.81 m).
   // 0 = the whole submap every time (the paper).
   int local_ba_keyframes = 6;
 
