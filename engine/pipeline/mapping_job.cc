@@ -184,10 +184,11 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   const bool stream = dynamic_cast<const StreamSource*>(source.get()) != nullptr;
   report.input_is_stream = stream;
   if (stream) report.input = RedactStreamUrl(report.input);
+  const auto* folder = dynamic_cast<const ImageFolderSource*>(source.get());  // null unless photos
   // A photo's frame index is its place in the folder's mapping order; the COLMAP model names
   // its images by their files.
   std::vector<std::string> photo_names;
-  if (const auto* folder = dynamic_cast<const ImageFolderSource*>(source.get())) {
+  if (folder != nullptr) {
     report.photos_reordered_by_time = static_cast<std::int64_t>(folder->photos_reordered_by_time());
     for (const std::filesystem::path& file : folder->files()) photo_names.push_back(file.filename().string());
   }
@@ -205,8 +206,7 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   if (options.gps_track) {
     gps = ReadGpsTrack(*options.gps_track);
     report.gps_track = options.gps_track->string();
-  } else if (const auto* folder = dynamic_cast<const ImageFolderSource*>(source.get());
-             folder != nullptr && options.find_gps) {
+  } else if (folder != nullptr && options.find_gps) {
     std::vector<GpsSample> exif = ExifGpsTrack(folder->files());
     if (!exif.empty()) {
       report.gps_track = "EXIF GPS of the photos";
@@ -265,7 +265,7 @@ MappingReport RunMapping(const std::filesystem::path& input, const std::filesyst
   // few held by older ones drifts where adjusting the whole submap does not (the 18 Brighton
   // Beach photos: 0.58 -> 0.81 m with the EXIF focal fixed, 0.50 -> 1.15 m with COLMAP's), and
   // a submap of photos is small enough for the whole adjustment to cost little.
-  if (dynamic_cast<const ImageFolderSource*>(source.get()) != nullptr) submap_options.local_ba_keyframes = 0;
+  if (folder != nullptr) submap_options.local_ba_keyframes = 0;
   SubmapBuilder builder(intrinsics, submap_options, cancel);
   if (resume) builder.ResumeAt(resume->next_submap_id, resume->focal_held, resume->k1_held, resume->readout_ms);
   SubmapAligner aligner(vocabulary, options.alignment, submaps_root, cancel);
