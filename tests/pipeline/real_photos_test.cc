@@ -20,11 +20,11 @@
 #include <nlohmann/json.hpp>
 
 #include "engine/core/camera.h"
-#include "engine/core/similarity_alignment.h"
 #include "engine/export/tum_trajectory.h"
 #include "engine/pipeline/mapping_job.h"
 #include "engine/pipeline/mapping_options.h"
 #include "tests/support/temp_dir.h"
+#include "tools/eval/trajectory_metrics.h"
 
 namespace glam {
 namespace {
@@ -39,27 +39,25 @@ struct Scored {
   double horizontal_rms = INFINITY;  // m, camera centres after a similarity fit to the GPS
 };
 
-// Photo folders are mapped at 1 fps (t = photo index); gps_enu.tum is at 2 fps.
+// Photo folders are mapped at 1 fps (t = photo index); gps_enu.tum is at 2 fps. The fit is
+// `glam eval`'s (tools/eval): a similarity on the matched camera centres.
 Scored ScoreAgainstGps(const fs::path& out) {
-  std::vector<Eigen::Vector3d> gps(kPhotos, Eigen::Vector3d::Constant(NAN));
-  for (const TimedPose& p : ReadTumTrajectory(kData / "gps_enu.tum")) {
-    const auto k = static_cast<std::size_t>(std::lround(p.timestamp * 2));
-    if (k < kPhotos) gps[k] = p.world_from_cam.translation();
-  }
-  std::vector<Eigen::Vector3d> mapped, truth;
-  for (const TimedPose& p : ReadTumTrajectory(out / "trajectory.tum")) {
-    const auto k = static_cast<std::size_t>(std::lround(p.timestamp));
-    if (k >= kPhotos || !gps[k].allFinite()) continue;
-    mapped.push_back(p.world_from_cam.translation());
-    truth.push_back(gps[k]);
-  }
+  const std::vector<TimedPose> gps = ReadTumTrajectory(kData / "gps_enu.tum");
+  std::vector<TimedPose> mapped = ReadTumTrajectory(out / "trajectory.tum");
+  for (TimedPose& pose : mapped) pose.timestamp /= 2;
+  constexpr double kTolerance = 0.25;  // half a photo
+  const eval::MatchedPoses matched = eval::MatchByTimestamp(gps, mapped, kTolerance);
   Scored s;
-  s.registered = mapped.size();
-  if (mapped.size() < 3) return s;
-  const Sim3 gps_from_map = AlignSimilarity(mapped, truth).target_from_source;
+  s.registered = matched.timestamps.size();
+  if (s.registered < 3) return s;
+  const Sim3 gps_from_map = eval::EvaluateTrajectory(gps, mapped, kTolerance, {}).gt_from_estimate;
   double sum = 0;
-  for (std::size_t i = 0; i < mapped.size(); ++i) sum += (gps_from_map * mapped[i] - truth[i]).head<2>().squaredNorm();
-  s.horizontal_rms = std::sqrt(sum / static_cast<double>(mapped.size()));
+  for (std::size_t i = 0; i < s.registered; ++i) {
+    const Eigen::Vector3d error =
+        gps_from_map * matched.est_world_from_cam[i].translation() - matched.gt_world_from_cam[i].translation();
+    sum += error.head<2>().squaredNorm();
+  }
+  s.horizontal_rms = std::sqrt(sum / static_cast<double>(s.registered));
   return s;
 }
 
