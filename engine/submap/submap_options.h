@@ -152,8 +152,10 @@ struct SubmapOptions {
   // matching, then an essential-matrix RANSAC to select the consistent matches. On by
   // UseCalibration (engine/pipeline/mapping_options.h), off otherwise, and used only while the
   // focal and k1 are fixed (not with --refine-focal): the lines are drawn with the camera
-  // model, and while the focal and k1 are still being estimated they miss the true matches (uncalibrated, on the 23 robustness clips: pitch60 and crf32 fell apart, 6 others
-  // got worse). Calibrated, on the loop benchmark video: 2.2 s of matching and RANSAC -> ~0.2 s;
+  // model, and while the focal and k1 are still being estimated they miss the true matches
+  // (uncalibrated, on the 23 robustness clips: pitch60 and crf32 fell apart, 6 others got
+  // worse; with --refine-focal from a 16 % short EXIF focal, 6 of the 18 Brighton Beach
+  // photos were lost). Calibrated, on the loop benchmark video: 2.2 s of matching and RANSAC -> ~0.2 s;
   // ATE lower on two of the four benchmark videos, within 0.004 m on the others
   // (docs/benchmarks.md).
   bool epipolar_triangulation_matching = false;
